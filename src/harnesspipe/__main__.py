@@ -1,0 +1,3 @@
+from harnesspipe.cli import main
+
+raise SystemExit(main())
