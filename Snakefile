@@ -1,0 +1,35 @@
+# harnesspipe: calibration of FE models of automotive wire harnesses.
+#   snakemake --cores 2                      full reproduction (default profile)
+#   snakemake --cores 2 --config profile=quick
+#   snakemake --report results/report/snakemake.html
+import json
+import sys
+
+from snakemake.utils import min_version
+
+min_version("9.0")
+
+configfile: "config/config.yaml"
+
+from harnesspipe import config as hp_config
+from harnesspipe.provenance import source_hash
+
+hp_config.validate(config, source="config/config.yaml (with --config overrides)")
+
+PY = sys.executable          # shell rules use Snakemake's own interpreter (DESIGN sec. 7)
+HP = f'"{PY}" -m harnesspipe'
+DATA = config["data_dir"]
+RES = "results"
+PROFILE = hp_config.resolution(config)
+FITS = {}  # stage -> fit.json paths; each stage rule file adds its own
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/data.smk"
+include: "workflow/rules/report.smk"
+
+
+rule all:
+    input:
+        f"{RES}/report/index.html",
+    default_target: True

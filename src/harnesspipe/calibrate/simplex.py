@@ -1,0 +1,132 @@
+"""Nelder-Mead calibration as used throughout the paper (Sec. 3.2, Fig. 5c).
+
+The initial simplex is the initial guess plus 5 % of each component in turn
+(Sec. 3.2).  Every evaluation -- parameters, error, wall time -- is kept in the
+trace and, when ``log_path`` is given, appended to an HDF5 log as it happens, so
+an interrupted calibration leaves its evaluations behind and a rerun with the
+same log replays them instead of recomputing (the objective is deterministic).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pandas as pd
+from scipy.optimize import minimize
+
+SIMPLEX_STEP = 0.05  # Sec. 3.2: "adding 5% of each component"
+
+
+@dataclass
+class FitResult:
+    """Outcome of a calibration: best point, its error and every evaluation made."""
+
+    names: list[str]
+    x: np.ndarray
+    fun: float
+    nfev: int
+    converged: bool
+    message: str
+    trace: pd.DataFrame
+
+    def params(self) -> dict[str, float]:
+        return {k: float(v) for k, v in zip(self.names, self.x)}
+
+
+def initial_simplex(x0: np.ndarray, step: float = SIMPLEX_STEP) -> np.ndarray:
+    """Vertices x0 and x0 + step*x0[i]*e_i (a zero component gets an absolute step)."""
+    x0 = np.asarray(x0, dtype=float)
+    m = x0.size
+    simplex = np.tile(x0, (m + 1, 1))
+    for i in range(m):
+        simplex[i + 1, i] += step * x0[i] if x0[i] != 0.0 else step
+    return simplex
+
+
+class EvaluationLog:
+    """Append-only HDF5 log of (parameters, error, wall time); replays on rerun."""
+
+    def __init__(self, path: Path | None, names: list[str]):
+        self.path = Path(path) if path else None
+        self.names = list(names)
+        self.rows: list[tuple[np.ndarray, float, float]] = []
+        self._replay: list[tuple[np.ndarray, float, float]] = []
+        if self.path and self.path.exists():
+            self._replay = self._read()
+
+    def _read(self):
+        with h5py.File(self.path, "r") as f:
+            stored = [n.decode() if isinstance(n, bytes) else n for n in f.attrs["names"]]
+            if stored != self.names:
+                raise ValueError(
+                    f"{self.path}: evaluation log is for parameters {stored}, not {self.names}; "
+                    "delete it to start afresh"
+                )
+            x, err, wall = f["x"][...], f["error"][...], f["wall_s"][...]
+        return [(x[i], float(err[i]), float(wall[i])) for i in range(len(err))]
+
+    def lookup(self, x: np.ndarray):
+        """Error of a replayed evaluation at exactly ``x`` (in order), else None."""
+        k = len(self.rows)
+        if k < len(self._replay) and np.array_equal(self._replay[k][0], x):
+            return self._replay[k]
+        self._replay = self._replay[:k]  # diverged: stop replaying
+        return None
+
+    def append(self, x: np.ndarray, error: float, wall_s: float) -> None:
+        self.rows.append((np.array(x, dtype=float), float(error), float(wall_s)))
+        if self.path is None:
+            return
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        with h5py.File(self.path, "a") as f:
+            if "x" not in f:
+                f.attrs["names"] = self.names
+                f.create_dataset("x", shape=(0, len(self.names)), maxshape=(None, len(self.names)))
+                f.create_dataset("error", shape=(0,), maxshape=(None,))
+                f.create_dataset("wall_s", shape=(0,), maxshape=(None,))
+            n = len(self.rows)
+            for key, val in (("x", x), ("error", error), ("wall_s", wall_s)):
+                f[key].resize(n, axis=0)
+                f[key][n - 1] = val
+
+    def frame(self) -> pd.DataFrame:
+        data = {name: [r[0][i] for r in self.rows] for i, name in enumerate(self.names)}
+        data["error"] = [r[1] for r in self.rows]
+        data["wall_s"] = [r[2] for r in self.rows]
+        return pd.DataFrame(data)
+
+
+def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
+                log_path=None, step=SIMPLEX_STEP) -> FitResult:
+    """Minimise ``objective(x) -> float`` by Nelder-Mead from the paper's simplex.
+
+    ``xatol`` is relative to ``x0`` (the search runs on x / x0, so parameters of
+    very different magnitude -- E in MPa and n -- get the same resolution);
+    ``fatol`` is absolute on the error.  A non-finite error is a rejected point:
+    it is logged and replaced by ``inf`` so the simplex moves away from it.
+    """
+    x0 = np.asarray(x0, dtype=float)
+    scale = np.where(x0 != 0.0, np.abs(x0), 1.0)
+    log = EvaluationLog(log_path, names)
+
+    def wrapped(z):
+        x = z * scale
+        hit = log.lookup(x)
+        if hit is not None:
+            log.append(x, hit[1], hit[2])
+            return hit[1]
+        t0 = time.perf_counter()
+        err = float(objective(x))
+        log.append(x, err, time.perf_counter() - t0)
+        return err if np.isfinite(err) else np.inf
+
+    z_simplex = initial_simplex(x0, step) / scale
+    res = minimize(wrapped, x0 / scale, method="Nelder-Mead",
+                   options={"initial_simplex": z_simplex, "xatol": xatol, "fatol": fatol,
+                            "maxfev": maxfev, "adaptive": False})
+    return FitResult(names=list(names), x=res.x * scale, fun=float(res.fun),
+                     nfev=len(log.rows), converged=bool(res.success),
+                     message=str(res.message), trace=log.frame())

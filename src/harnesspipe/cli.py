@@ -1,0 +1,53 @@
+"""Console command ``harnesspipe`` (DESIGN sec. 5).
+
+Exit codes: 0 success, 2 bad input (config, data, option), 3 a simulation or
+calibration that failed (convergence, instability).  Errors are one line on
+stderr naming what and where.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from harnesspipe import __version__
+
+# Sub-command modules: each defines ``register(subparsers)``; the handler set
+# with ``set_defaults(func=...)`` receives the parsed namespace.
+COMMAND_MODULES = (
+    "harnesspipe.commands.data",
+    "harnesspipe.commands.rom",
+    "harnesspipe.commands.report",
+)
+
+
+class InputError(ValueError):
+    """Bad command-line input."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="harnesspipe", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"harnesspipe {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).register(sub)
+    return parser
+
+
+def _input_errors() -> tuple[type[BaseException], ...]:
+    from harnesspipe.config import ConfigError
+    from harnesspipe.data.experimental import DataError
+    return (ConfigError, DataError, InputError, FileNotFoundError)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except _input_errors() as exc:
+        for line in str(exc).splitlines() or [type(exc).__name__]:
+            print(f"harnesspipe: error: {line}", file=sys.stderr)
+        return 2
+    except (RuntimeError, FloatingPointError) as exc:
+        print(f"harnesspipe: failed: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return 3

@@ -1,0 +1,1 @@
+"""Sub-commands of the ``harnesspipe`` console command (see harnesspipe.cli)."""

@@ -1,0 +1,102 @@
+"""``harnesspipe rom three-point`` and ``harnesspipe rom cantilever`` (DESIGN sec. 5)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def _number(text: str, *, strict: bool) -> float:
+    import argparse
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (v > 0.0 if strict else v >= 0.0):
+        raise argparse.ArgumentTypeError(f"{text!r} must be {'>' if strict else '>='} 0")
+    return v
+
+
+def _positive(text: str) -> float:
+    return _number(text, strict=True)
+
+
+def _nonneg(text: str) -> float:
+    return _number(text, strict=False)
+
+
+def register(sub) -> None:
+    rom = sub.add_parser("rom", help="reduced-order beam models")
+    rsub = rom.add_subparsers(dest="rom_command", required=True, metavar="MODEL")
+
+    p = rsub.add_parser("three-point", help="three-point bending of an effective beam")
+    p.add_argument("--E", type=_positive, required=True, help="effective modulus E_eff [MPa]")
+    p.add_argument("--sigma-y", type=_positive, help="yield stress [MPa] (required unless --elastic)")
+    p.add_argument("--K", type=_nonneg, help="hardening coefficient of eq. 2 [MPa]")
+    p.add_argument("--n", type=_positive, help="hardening exponent of eq. 2")
+    p.add_argument("--radius", type=_positive, required=True, help="outer radius r_o [mm]")
+    p.add_argument("--span", type=_positive, default=127.0)
+    p.add_argument("--overhang", type=_nonneg, default=36.5)
+    p.add_argument("--deflection", type=_positive, default=30.0)
+    p.add_argument("--supports", choices=("rollers", "pinned"), default="rollers")
+    p.add_argument("--elements", type=int, default=None, help="beam elements (default: model's)")
+    p.add_argument("--elastic", action="store_true", help="ignore plasticity")
+    p.add_argument("--out", type=Path, required=True, help="CSV: deflection_mm,force_N")
+    p.set_defaults(func=_three_point)
+
+    p = rsub.add_parser("cantilever", help="cantilever under a tip dead load")
+    p.add_argument("--E", type=_positive, required=True)
+    p.add_argument("--radius", type=_positive, required=True)
+    p.add_argument("--length", type=_positive, required=True)
+    p.add_argument("--tip-load", type=_positive, required=True, help="final tip load P [N]")
+    p.add_argument("--sigma-y", type=_positive)
+    p.add_argument("--K", type=_nonneg)
+    p.add_argument("--n", type=_positive)
+    p.add_argument("--elements", type=int, default=None)
+    p.add_argument("--elastic", action="store_true")
+    p.add_argument("--out", type=Path, required=True,
+                   help="CSV: load_N,tip_ux_mm,tip_uy_mm,tip_rotation_rad")
+    p.set_defaults(func=_cantilever)
+
+
+def _plastic_args(args) -> dict:
+    from harnesspipe.cli import InputError
+    if args.elastic:
+        return {}
+    missing = [f"--{n.replace('_', '-')}" for n in ("sigma_y", "K", "n") if getattr(args, n) is None]
+    if missing:
+        raise InputError(f"rom {args.rom_command}: {', '.join(missing)} required unless --elastic")
+    return {"sigma_y": args.sigma_y, "K": args.K, "n": args.n}
+
+
+def _mesh(args) -> dict:
+    from harnesspipe.cli import InputError
+    if args.elements is None:
+        return {}
+    if args.elements < 2:
+        raise InputError(f"rom {args.rom_command}: --elements {args.elements}: need at least 2")
+    return {"n_elements": args.elements}
+
+
+def _write(frame, out: Path) -> int:
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(out.name + ".tmp")
+    frame.to_csv(tmp, index=False, float_format="%.8g")
+    tmp.replace(out)
+    print(f"wrote {out} ({len(frame)} rows)")
+    return 0
+
+
+def _three_point(args) -> int:
+    from harnesspipe import rom
+    plastic = _plastic_args(args)
+    frame = rom.three_point(E=args.E, radius=args.radius, supports=args.supports, span=args.span,
+                            overhang=args.overhang, deflection=args.deflection,
+                            elastic=args.elastic, **plastic, **_mesh(args))
+    return _write(frame, args.out)
+
+
+def _cantilever(args) -> int:
+    from harnesspipe import rom
+    plastic = _plastic_args(args)
+    frame = rom.cantilever(E=args.E, radius=args.radius, length=args.length,
+                           tip_load=args.tip_load, elastic=args.elastic, **plastic, **_mesh(args))
+    return _write(frame, args.out)

@@ -1,0 +1,57 @@
+"""Figures of the report: measured band, mean, simulated curve; optimiser traces."""
+from __future__ import annotations
+
+import io
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def fit_figure(prepared, curve=None, title="", xlabel="displacement [mm]", label="simulated"):
+    """Band (min/max of the replicates), their mean and a simulated curve."""
+    fig, ax = plt.subplots(figsize=(5.2, 3.6), dpi=110)
+    ax.fill_between(prepared.grid, prepared.lo, prepared.hi, color="0.82", label="measured (min/max)")
+    for name, s in sorted(prepared.samples.items()):
+        ax.plot(s["displacement_mm"], s["force_N"], color="0.6", lw=0.6)
+    ax.plot(prepared.grid, prepared.mean, color="k", lw=1.6, label="measured mean")
+    if curve is not None:
+        ax.plot(curve["displacement_mm"], curve["force_N"], color="tab:red", lw=1.6, ls="--", label=label)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("force [N]")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    return fig
+
+
+def trace_figure(trace, title=""):
+    """Error of every evaluation and the running best (log scale)."""
+    fig, ax = plt.subplots(figsize=(5.2, 3.0), dpi=110)
+    err = np.asarray(trace["error"], dtype=float)
+    k = np.arange(1, err.size + 1)
+    ax.semilogy(k, np.where(np.isfinite(err), err, np.nan), ".", color="tab:blue", ms=3, label="evaluation")
+    ax.semilogy(k, np.minimum.accumulate(np.where(np.isfinite(err), err, np.inf)), color="k", lw=1.2,
+                label="best so far")
+    ax.set_xlabel("evaluation")
+    ax.set_ylabel(r"$\|e\|_{l_2}$ [N]")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def save(fig, path) -> None:
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def png_bytes(fig) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    plt.close(fig)
+    return buf.getvalue()

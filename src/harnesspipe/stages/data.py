@@ -1,0 +1,78 @@
+"""Stage 1, data check: validate the data folder and resample each test."""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from harnesspipe.data.experimental import DataError, load_test, read_manifest
+
+
+def check_data(data_dir: Path) -> str:
+    """Validate every test; return a one-line summary or raise DataError (all problems)."""
+    manifest = read_manifest(data_dir)
+    problems: list[str] = []
+    n_samples = n_rows = 0
+    kinds: dict[str, int] = {}
+    for test_id, entry in manifest["tests"].items():
+        ts = load_test(data_dir, test_id, entry, problems)
+        if ts is None:
+            continue
+        kinds[entry["kind"]] = kinds.get(entry["kind"], 0) + 1
+        n_samples += len(ts.samples)
+        n_rows += sum(s.force.size for s in ts.samples)
+    if problems:
+        raise DataError(problems)
+    by_kind = ", ".join(f"{v} {k}" for k, v in sorted(kinds.items()))
+    return (f"{data_dir}: OK: {len(manifest['tests'])} tests ({by_kind}), "
+            f"{n_samples} samples, {n_rows} rows")
+
+
+def prepare_test(data_dir: Path, test_id: str, out_h5: Path, n_grid: int = 101) -> Path:
+    """Resample one test's replicates to a common grid; write raw samples, mean,
+    min/max band and marker rows to one HDF5 file (written atomically)."""
+    manifest = read_manifest(data_dir)
+    if test_id not in manifest["tests"]:
+        raise DataError([f"{Path(data_dir) / 'manifest.yaml'}: no test {test_id!r}"])
+    problems: list[str] = []
+    ts = load_test(data_dir, test_id, manifest["tests"][test_id], problems, n_grid)
+    if ts is None:
+        raise DataError(problems)
+    out_h5 = Path(out_h5)
+    out_h5.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out_h5.with_suffix(".tmp")
+    with h5py.File(tmp, "w") as f:
+        f.attrs["test_id"] = test_id
+        f.attrs["entry"] = json.dumps(ts.entry)
+        for name in ("grid", "mean", "lo", "hi"):
+            f[name] = getattr(ts, name)
+        for s in ts.samples:
+            g = f.create_group(f"samples/{s.name}")
+            g["time_s"], g["displacement_mm"], g["force_N"] = s.time, s.displacement, s.force
+            if s.markers is not None:
+                g["markers"] = s.markers
+    tmp.replace(out_h5)
+    return out_h5
+
+
+@dataclass
+class Prepared:
+    """A prepared test as read back by later stages."""
+
+    test_id: str
+    entry: dict
+    grid: np.ndarray
+    mean: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    samples: dict[str, dict[str, np.ndarray]]
+
+
+def read_prepared(path: Path) -> Prepared:
+    with h5py.File(path, "r") as f:
+        samples = {name: {k: g[k][...] for k in g} for name, g in f["samples"].items()}
+        return Prepared(str(f.attrs["test_id"]), json.loads(f.attrs["entry"]),
+                        f["grid"][...], f["mean"][...], f["lo"][...], f["hi"][...], samples)

@@ -1,0 +1,38 @@
+# Shared helpers of the rule files: the data manifest as seen at parse time and
+# the code-version params.
+import yaml
+from pathlib import Path
+
+
+def manifest_tests():
+    """Tests of the manifest ({} if it is missing or unreadable: check_data reports why)."""
+    path = Path(DATA) / "manifest.yaml"
+    try:
+        with open(path) as f:
+            return (yaml.safe_load(f) or {}).get("tests", {}) or {}
+    except (OSError, yaml.YAMLError):
+        return {}
+
+
+TESTS = manifest_tests()
+
+
+def tests_of(kind):
+    return sorted(t for t, e in TESTS.items() if e.get("kind") == kind)
+
+
+def sample_files(test_id):
+    """CSV files (curves and markers) of one test."""
+    files = []
+    for s in TESTS[test_id].get("samples", []):
+        files.append(f"{DATA}/{s['file']}")
+        if "markers" in s:
+            files.append(f"{DATA}/{s['markers']}")
+    return files
+
+
+def test_id_for(kind, item, load_case=None):
+    for t, e in TESTS.items():
+        if e.get("kind") == kind and e.get("item") == item and e.get("load_case") == load_case:
+            return t
+    raise ValueError(f"{DATA}/manifest.yaml: no {kind} test for {item!r}")

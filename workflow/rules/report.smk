@@ -1,0 +1,35 @@
+# Stage 9: the offline HTML report of every fit.
+
+
+rule effective_config:
+    """The config of this run, with --config overrides applied, for the report."""
+    output:
+        f"{RES}/config.yaml",
+    params:
+        cfg=json.dumps(config, sort_keys=True),
+    run:
+        Path(output[0]).write_text(yaml.safe_dump(json.loads(params.cfg), sort_keys=False))
+
+
+def report_fits():
+    """stage=fit.json arguments of every fitting stage included in the workflow."""
+    return [f"{stage}={path}" for stage, paths in FITS.items() for path in paths]
+
+
+rule report:
+    """One self-contained HTML file (figures embedded, no network)."""
+    input:
+        config=f"{RES}/config.yaml",
+        check=f"{RES}/data/check.txt",
+        prepared=[f"{RES}/data/{t}.h5" for t in sorted(TESTS)],
+        fits=[p for paths in FITS.values() for p in paths],
+    output:
+        report(f"{RES}/report/index.html", caption="../report/index.rst", category="Report"),
+    log:
+        f"{RES}/logs/report.log",
+    params:
+        fits=report_fits(),
+        code=source_hash("report", "stages/common.py"),
+    shell:
+        "{HP} report --config {input.config} --results {RES} --check {input.check} "
+        "--prepared {input.prepared} --fits {params.fits} --out {output} > {log} 2>&1"
