@@ -1,0 +1,138 @@
+"""Plane-stress material kernels for shells: J2 plasticity (eqs. 1-2) and the
+orthotropic elastic law of eq. 12.
+
+J2 plasticity with the power-law hardening of eq. 2 under plane stress
+(sigma_33 = 0) is integrated by the 3D radial return (Simo & Hughes 1998,
+Box 3.1; de Souza Neto et al. 2008, Sec. 7.3) with the through-thickness strain
+eps_33 as an extra unknown, solved by Newton iteration so that sigma_33 = 0
+(de Borst 1991, "The zero-normal-stress condition in plane-stress and shell
+elastoplasticity").  The plane-stress consistent tangent is the 3D consistent
+tangent (de Souza Neto eq. 7.120) statically condensed on sigma_33 = 0.
+
+The kernels work on small strains or, unchanged, on logarithmic (Hencky) strains
+with additive plastic strain (Eterovic & Bathe 1990; Miehe, Apel & Lambrecht
+2002), which is how the shell elements use them at finite strain.
+
+Conventions: in-plane strain ``eps = (eps_11, eps_22, gamma_12)`` with
+engineering shear; stress ``sig = (sigma_11, sigma_22, sigma_12)``; tangent
+``D = d sig / d eps`` (3 x 3).  History per material point, ``STATE_SIZE``
+values: plastic strain tensor components (11, 22, 33, 12), the effective plastic
+strain eps_bar_p of eq. 2 and the total through-thickness strain eps_33.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from harnesspipe.fe.hardening import flow_stress, hardening_slope, plastic_increment
+
+STATE_SIZE = 6
+P11, P22, P33, P12, EPS_BAR_P, EPS33 = range(STATE_SIZE)
+SIGMA33_TOL = 1.0e-11  # relative tolerance on sigma_33 = 0
+SIGMA33_MAXIT = 30
+
+
+@njit(cache=True)
+def _elastic_constants(E, nu):
+    """Shear and bulk moduli."""
+    return E / (2.0 * (1.0 + nu)), E / (3.0 * (1.0 - 2.0 * nu))
+
+
+@njit(cache=True)
+def _radial_return(a11, a22, a33, a12, eps_bar_p, G, kappa, sigma_y, K, n, out4, D4):
+    """3D radial return for an elastic trial strain with eps_13 = eps_23 = 0.
+
+    ``a..`` are trial elastic strains (tensor components).  Writes the stress
+    (11, 22, 33, 12) to ``out4`` and the consistent tangent in Voigt form
+    (rows/cols 11, 22, 33, 12; the 12 column acts on the engineering shear) to
+    ``D4``.  Returns (d eps_bar_p, n11, n22, n33, n12) with n the unit normal
+    s_trial/|s_trial| (zero when elastic).
+    """
+    tr = a11 + a22 + a33
+    m = tr / 3.0
+    s11 = 2.0 * G * (a11 - m)
+    s22 = 2.0 * G * (a22 - m)
+    s33 = 2.0 * G * (a33 - m)
+    s12 = 2.0 * G * a12
+    norm_s = np.sqrt(s11 * s11 + s22 * s22 + s33 * s33 + 2.0 * s12 * s12)
+    q_trial = np.sqrt(1.5) * norm_s
+    dg = plastic_increment(q_trial, 3.0 * G, eps_bar_p, sigma_y, K, n)
+    theta = 1.0
+    theta_bar = 0.0
+    n11 = n22 = n33 = n12 = 0.0
+    if dg > 0.0:
+        theta = 1.0 - 3.0 * G * dg / q_trial
+        H = hardening_slope(eps_bar_p + dg, K, n)
+        theta_bar = 1.0 / (1.0 + H / (3.0 * G)) - (1.0 - theta)
+        n11, n22, n33, n12 = s11 / norm_s, s22 / norm_s, s33 / norm_s, s12 / norm_s
+    p = kappa * tr
+    out4[0] = p + theta * s11
+    out4[1] = p + theta * s22
+    out4[2] = p + theta * s33
+    out4[3] = theta * s12
+    nv = (n11, n22, n33, n12)
+    for i in range(4):
+        for j in range(4):
+            dev = (1.0 if i == j else 0.0) - (1.0 / 3.0 if i < 3 and j < 3 else 0.0)
+            if i == 3 and j == 3:
+                dev = 0.5
+            vol = kappa if i < 3 and j < 3 else 0.0
+            D4[i, j] = vol + 2.0 * G * theta * dev - 2.0 * G * theta_bar * nv[i] * nv[j]
+    return dg, n11, n22, n33, n12
+
+
+@njit(cache=True)
+def j2_plane_stress(eps, state_old, E, nu, sigma_y, K, n, sig, D, state_new, work4, work44):
+    """J2 plane-stress update with eq. 2 hardening.
+
+    ``eps`` (3,) total in-plane strain, ``state_old``/``state_new`` (STATE_SIZE,)
+    history before/after, ``sig`` (3,) and ``D`` (3, 3) outputs, ``work4`` (4,)
+    and ``work44`` (4, 4) scratch (passed in so that no allocation happens).
+    Returns the effective plastic strain increment.
+    """
+    G, kappa = _elastic_constants(E, nu)
+    a11 = eps[0] - state_old[P11]
+    a22 = eps[1] - state_old[P22]
+    a12 = 0.5 * eps[2] - state_old[P12]
+    # elastic plane-stress guess for the through-thickness elastic strain
+    a33 = -nu / (1.0 - nu) * (a11 + a22)
+    scale = flow_stress(state_old[EPS_BAR_P], sigma_y, K, n) + E * 1e-12
+    dg = 0.0
+    for _ in range(SIGMA33_MAXIT):
+        dg, n11, n22, n33, n12 = _radial_return(a11, a22, a33, a12, state_old[EPS_BAR_P],
+                                                G, kappa, sigma_y, K, n, work4, work44)
+        if abs(work4[2]) <= SIGMA33_TOL * scale:
+            break
+        a33 -= work4[2] / work44[2, 2]
+    root = np.sqrt(1.5)
+    state_new[P11] = state_old[P11] + dg * root * n11
+    state_new[P22] = state_old[P22] + dg * root * n22
+    state_new[P33] = state_old[P33] + dg * root * n33
+    state_new[P12] = state_old[P12] + dg * root * n12
+    state_new[EPS_BAR_P] = state_old[EPS_BAR_P] + dg
+    state_new[EPS33] = a33 + state_old[P33]  # a33 is the trial elastic strain
+    idx = (0, 1, 3)
+    sig[0], sig[1], sig[2] = work4[0], work4[1], work4[3]
+    c33 = work44[2, 2]
+    for i in range(3):
+        for j in range(3):
+            D[i, j] = work44[idx[i], idx[j]] - work44[idx[i], 2] * work44[2, idx[j]] / c33
+    return dg
+
+
+@njit(cache=True)
+def orthotropic_plane_stress_stiffness(E1, E2, nu12, G12, D):
+    """Inverse of the eq. 12 compliance [[1/E1, -nu12/E1, 0], [-nu12/E1, 1/E2, 0],
+    [0, 0, 1/G12]] (material axes 1 = warp, 2 = weft), written to ``D`` (3, 3)."""
+    nu21 = nu12 * E2 / E1
+    det = 1.0 - nu12 * nu21
+    D[:, :] = 0.0
+    D[0, 0] = E1 / det
+    D[1, 1] = E2 / det
+    D[0, 1] = D[1, 0] = nu12 * E2 / det
+    D[2, 2] = G12
+
+
+def fabric_shear_modulus(E1: float, E2: float, nu12: float) -> float:
+    """G12 = 0.5 (E1 + E2) / (2 (1 + nu12)) as chosen in Sec. 4.2.2."""
+    return 0.5 * (E1 + E2) / (2.0 * (1.0 + nu12))
