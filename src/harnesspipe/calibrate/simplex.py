@@ -84,9 +84,9 @@ class EvaluationLog:
         with h5py.File(self.path, "a") as f:
             if "x" not in f:
                 f.attrs["names"] = self.names
-                f.create_dataset("x", shape=(0, len(self.names)), maxshape=(None, len(self.names)))
-                f.create_dataset("error", shape=(0,), maxshape=(None,))
-                f.create_dataset("wall_s", shape=(0,), maxshape=(None,))
+                f.create_dataset("x", shape=(0, len(self.names)), maxshape=(None, len(self.names)), dtype="f8")
+                f.create_dataset("error", shape=(0,), maxshape=(None,), dtype="f8")
+                f.create_dataset("wall_s", shape=(0,), maxshape=(None,), dtype="f8")
             n = len(self.rows)
             for key, val in (("x", x), ("error", error), ("wall_s", wall_s)):
                 f[key].resize(n, axis=0)

@@ -116,7 +116,7 @@ def synthesize_spec(spec: TestSpec, out: Path, syn: dict) -> tuple[dict, dict]:
         params = perturb(spec.truth, rng, syn["variability"])
         stem = f"{spec.test_id}_s{k}"
         samples.append(write_sample(folder, stem, spec.simulate(params), spec, rng, syn))
-        per_sample[f"s{k}"] = {p: round(v, 6) for p, v in params.items()}
+        per_sample[f"s{k}"] = {p: round(float(v), 6) for p, v in params.items()}
     entry = {"kind": spec.kind, "item": spec.item}
     if spec.load_case:
         entry["load_case"] = spec.load_case
