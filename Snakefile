@@ -26,10 +26,12 @@ FITS = {}  # stage -> fit.json paths; each stage rule file adds its own
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/data.smk"
+include: "workflow/rules/rom.smk"
 include: "workflow/rules/report.smk"
 
 
 rule all:
     input:
+        f"{RES}/rom/table3.csv",
         f"{RES}/report/index.html",
     default_target: True

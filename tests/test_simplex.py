@@ -67,3 +67,11 @@ def test_log_for_other_parameters_is_refused(tmp_path):
     nelder_mead(lambda p: float(p[0] ** 2), [1.0], ["a"], log_path=log, maxfev=12)
     with pytest.raises(ValueError, match="evaluation log is for parameters"):
         nelder_mead(lambda p: float(p[0] ** 2), [1.0], ["b"], log_path=log)
+
+
+def test_log_of_another_objective_is_not_replayed(tmp_path):
+    log = tmp_path / "trace.h5"
+    nelder_mead(lambda p: float((p[0] - 1.0) ** 2), [2.0], ["a"], log_path=log, key="data-v1")
+    res = nelder_mead(lambda p: float((p[0] - 3.0) ** 2), [2.0], ["a"], log_path=log, key="data-v2",
+                      xatol=1e-8, fatol=1e-12)
+    assert res.x[0] == pytest.approx(3.0, abs=1e-4)

@@ -18,6 +18,7 @@ COMMAND_MODULES = (
     "harnesspipe.commands.data",
     "harnesspipe.commands.rom",
     "harnesspipe.commands.report",
+    "harnesspipe.commands.stage",
 )
 
 

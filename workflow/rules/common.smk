@@ -36,3 +36,17 @@ def test_id_for(kind, item, load_case=None):
         if e.get("kind") == kind and e.get("item") == item and e.get("load_case") == load_case:
             return t
     raise ValueError(f"{DATA}/manifest.yaml: no {kind} test for {item!r}")
+
+
+rule numba_warmup:
+    """Compile (or load from cache) every Numba kernel once, before parallel jobs start.
+
+    Jobs starting together would each compile everything (Numba has no lock).
+    The output name carries the FE-core hash, so a changed core warms up again.
+    """
+    output:
+        f"{RES}/logs/numba_warmup_{source_hash('fe')}.done",
+    log:
+        f"{RES}/logs/numba_warmup.log",
+    shell:
+        "{HP} stage warmup > {log} 2>&1 && cp {log} {output}"

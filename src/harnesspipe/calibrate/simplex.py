@@ -49,9 +49,10 @@ def initial_simplex(x0: np.ndarray, step: float = SIMPLEX_STEP) -> np.ndarray:
 class EvaluationLog:
     """Append-only HDF5 log of (parameters, error, wall time); replays on rerun."""
 
-    def __init__(self, path: Path | None, names: list[str]):
+    def __init__(self, path: Path | None, names: list[str], key: str = ""):
         self.path = Path(path) if path else None
         self.names = list(names)
+        self.key = key
         self.rows: list[tuple[np.ndarray, float, float]] = []
         self._replay: list[tuple[np.ndarray, float, float]] = []
         if self.path and self.path.exists():
@@ -65,7 +66,11 @@ class EvaluationLog:
                     f"{self.path}: evaluation log is for parameters {stored}, not {self.names}; "
                     "delete it to start afresh"
                 )
+            stale = f.attrs.get("key", "") != self.key
             x, err, wall = f["x"][...], f["error"][...], f["wall_s"][...]
+        if stale:  # written for another objective: nothing to replay
+            self.path.unlink()
+            return []
         return [(x[i], float(err[i]), float(wall[i])) for i in range(len(err))]
 
     def lookup(self, x: np.ndarray):
@@ -84,6 +89,7 @@ class EvaluationLog:
         with h5py.File(self.path, "a") as f:
             if "x" not in f:
                 f.attrs["names"] = self.names
+                f.attrs["key"] = self.key
                 f.create_dataset("x", shape=(0, len(self.names)), maxshape=(None, len(self.names)), dtype="f8")
                 f.create_dataset("error", shape=(0,), maxshape=(None,), dtype="f8")
                 f.create_dataset("wall_s", shape=(0,), maxshape=(None,), dtype="f8")
@@ -100,17 +106,19 @@ class EvaluationLog:
 
 
 def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
-                log_path=None, step=SIMPLEX_STEP) -> FitResult:
+                log_path=None, key="", step=SIMPLEX_STEP) -> FitResult:
     """Minimise ``objective(x) -> float`` by Nelder-Mead from the paper's simplex.
 
     ``xatol`` is relative to ``x0`` (the search runs on x / x0, so parameters of
     very different magnitude -- E in MPa and n -- get the same resolution);
     ``fatol`` is absolute on the error.  A non-finite error is a rejected point:
     it is logged and replaced by ``inf`` so the simplex moves away from it.
+    ``key`` identifies the objective (e.g. a hash of its data and settings): a log
+    written under another key is discarded instead of replayed.
     """
     x0 = np.asarray(x0, dtype=float)
     scale = np.where(x0 != 0.0, np.abs(x0), 1.0)
-    log = EvaluationLog(log_path, names)
+    log = EvaluationLog(log_path, names, key)
 
     def wrapped(z):
         x = z * scale

@@ -1,0 +1,60 @@
+"""``harnesspipe stage ...``: the entry points Snakemake rules call, one per stage step.
+
+Each takes its settings as one JSON object (the rule builds it from the config),
+so the rule's params -- and thus its reruns -- follow exactly the settings used.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+
+def _settings(text: str) -> dict:
+    import argparse
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise argparse.ArgumentTypeError(f"--settings is not valid JSON: {exc}") from None
+    if not isinstance(value, dict):
+        raise argparse.ArgumentTypeError("--settings must be a JSON object")
+    return value
+
+
+def register(sub) -> None:
+    stage = sub.add_parser("stage", help="pipeline stage steps (called by the Snakemake rules)")
+    ssub = stage.add_subparsers(dest="stage_command", required=True, metavar="STEP")
+
+    p = ssub.add_parser("warmup", help="compile or load every Numba kernel once")
+    p.set_defaults(func=_warmup)
+
+    p = ssub.add_parser("rom-fit", help="eq. 13 + simplex for one CWB case (Sec. 4.3)")
+    p.add_argument("--case", required=True)
+    p.add_argument("--reference", type=Path, required=True, help="prepared test (HDF5)")
+    p.add_argument("--settings", type=_settings, required=True)
+    p.add_argument("--outdir", type=Path, required=True)
+    p.set_defaults(func=_rom_fit)
+
+    p = ssub.add_parser("table3", help="collect ROM fits into table3.csv")
+    p.add_argument("--fits", type=Path, nargs="+", required=True)
+    p.add_argument("--out", type=Path, required=True)
+    p.set_defaults(func=_table3)
+
+
+def _warmup(args) -> int:
+    from harnesspipe.stages.warmup import warm_up
+    for name, seconds in warm_up().items():
+        print(f"{name}: {seconds:.2f} s")
+    return 0
+
+
+def _rom_fit(args) -> int:
+    from harnesspipe.stages.rom import fit_case
+    fit = fit_case(args.case, args.reference, args.settings, args.outdir)
+    print(json.dumps(fit, indent=2))
+    return 0
+
+
+def _table3(args) -> int:
+    from harnesspipe.stages.rom import table3
+    print(table3(args.fits, args.out).to_string(index=False))
+    return 0

@@ -1,0 +1,57 @@
+# Stage 7: reduced-order beam properties of every CWB case (Sec. 4.3, eq. 13 + simplex).
+
+ROM_CASES = sorted(e["item"] for e in TESTS.values()
+                   if e.get("kind") == "three_point" and e.get("item") in config["cases"])
+
+
+def rom_settings(case):
+    tp = config["three_point"]
+    return json.dumps({
+        "r_o": config["cases"][case]["r_o"],
+        "supports": config["rom"]["supports"],
+        "reference": config["rom"]["reference"],
+        "three_point": {k: tp[k] for k in ("span", "overhang", "deflection")},
+        "rom": {k: config["rom"][k] for k in ("linear_window", "yield_deflection",
+                                              "simplex_parameters", "simplex", "initial_guess")},
+        "mesh": PROFILE["rom"],
+        "maxfev": PROFILE["simplex_maxfev"],
+    }, sort_keys=True)
+
+
+rule rom_fit:
+    """eq. 13 (E_eff, first sigma_Y), then Nelder-Mead on the hardening of a beam model."""
+    input:
+        lambda wc: f"{RES}/data/{test_id_for('three_point', wc.case)}.h5",
+        warm=rules.numba_warmup.output,
+    output:
+        fit=f"{RES}/rom/{{case}}/fit.json",
+        curve=f"{RES}/rom/{{case}}/curve.csv",
+        trace=f"{RES}/rom/{{case}}/trace.h5",
+        plot=report(f"{RES}/rom/{{case}}/fit.png", caption="../report/rom_fit.rst",
+                    category="ROM (Sec. 4.3)", subcategory="{case}"),
+    log:
+        f"{RES}/logs/rom_fit_{{case}}.log",
+    params:
+        settings=lambda wc: rom_settings(wc.case),
+        code=source_hash("fe", "models", "rom.py", "calibrate", "stages/rom.py"),
+    threads: 1
+    shell:
+        "NUMBA_NUM_THREADS={threads} {HP} stage rom-fit --case {wildcards.case} --reference {input[0]} "
+        "--settings '{params.settings}' --outdir {RES}/rom/{wildcards.case} > {log} 2>&1"
+
+
+rule table3:
+    """Table 3 across all cases: results/rom/table3.csv (case,E,sigma_y,K,n,reference)."""
+    input:
+        [f"{RES}/rom/{c}/fit.json" for c in ROM_CASES],
+    output:
+        f"{RES}/rom/table3.csv",
+    log:
+        f"{RES}/logs/table3.log",
+    params:
+        code=source_hash("stages/rom.py"),
+    shell:
+        "{HP} stage table3 --fits {input} --out {output} > {log} 2>&1"
+
+
+FITS["rom"] = [f"{RES}/rom/{c}/fit.json" for c in ROM_CASES]
