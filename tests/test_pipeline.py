@@ -1,0 +1,105 @@
+"""The pipeline end to end (quick profile) in a temporary copy of the project.
+
+Also: reruns follow inputs and code exactly, and the report renders in Chromium.
+"""
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from conftest import ARTIFACTS, copy_project
+
+pytestmark = pytest.mark.pipeline
+
+
+def snakemake(project: Path, *args: str) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(project / "src")}  # the copy's package, not the repo's
+    return subprocess.run([sys.executable, "-m", "snakemake", "--cores", "2", "--config", "profile=quick",
+                           *args], cwd=project, env=env, capture_output=True, text=True)
+
+
+def planned_jobs(project: Path) -> dict[str, int]:
+    """Rule -> job count of a dry run ({} when nothing is to be done)."""
+    run = snakemake(project, "--dry-run")
+    assert run.returncode == 0, run.stdout + run.stderr
+    text = run.stdout + run.stderr
+    if "Nothing to be done" in text:
+        return {}
+    table = text.split("Job stats:")[1]
+    return {m.group(1): int(m.group(2)) for m in re.finditer(r"^(\w+)\s+(\d+)\s*$", table, re.M)
+            if m.group(1) != "total"}
+
+
+@pytest.fixture(scope="module")
+def project(tmp_path_factory) -> Path:
+    project = copy_project(tmp_path_factory.mktemp("pipeline") / "project")
+    run = snakemake(project)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-6000:]
+    return project
+
+
+def test_outputs_of_every_stage(project):
+    assert (project / "results" / "data" / "check.txt").read_text().startswith("data/experimental: OK:")
+    table3 = pd.read_csv(project / "results" / "rom" / "table3.csv")
+    assert list(table3.columns) == ["case", "E", "sigma_y", "K", "n", "reference"]
+    assert len(table3) == 6 and (table3[["E", "sigma_y", "K", "n"]] > 0).all().all()
+    html = (project / "results" / "report" / "index.html").read_text()
+    assert "Reduced-order beam properties" in html and "cwb19_t2_closed" in html
+    assert "http://" not in html and "https://" not in html  # nothing to fetch: opens offline
+
+
+def test_untouched_tree_reruns_nothing(project):
+    assert planned_jobs(project) == {}
+
+
+def test_code_change_reruns_only_its_users(project):
+    html_py = project / "src" / "harnesspipe" / "report" / "html.py"
+    html_py.write_text(html_py.read_text() + "\n# a comment changes the code version\n")
+    assert planned_jobs(project) == {"report": 1}
+    assert snakemake(project).returncode == 0
+    assert planned_jobs(project) == {}
+
+
+def test_one_changed_csv_reruns_only_its_dependants(project):
+    csv = project / "data" / "experimental" / "three_point" / "cwb19_t2_closed_s2.csv"
+    lines = csv.read_text().splitlines()
+    t, u, f = lines[50].split(",")
+    lines[50] = f"{t},{u},{float(f) * 1.01:.6g}"
+    csv.write_text("\n".join(lines) + "\n")
+    assert planned_jobs(project) == {"check_data": 1, "prepare_test": 1, "rom_fit": 1,
+                                     "table3": 1, "report": 1, "all": 1}
+
+
+@pytest.mark.browser
+def test_report_renders_in_chromium(project, in_ci):
+    chromium = shutil.which("chromium")
+    if chromium is None:
+        if in_ci:
+            pytest.fail("chromium is not installed; .ci/run installs the Debian package")
+        pytest.skip("chromium not installed (apt-get install chromium); CI runs this test")
+    from playwright.sync_api import sync_playwright
+    page_path = project / "results" / "report" / "index.html"
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    errors, requests = [], []
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium, args=[
+            "--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-quic"])
+        page = browser.new_page(viewport={"width": 1200, "height": 900})
+        page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.on("request", lambda r: requests.append(r.url))
+        page.goto(page_path.as_uri())
+        page.wait_for_load_state("load")
+        images = page.evaluate("Array.from(document.images).map(i => [i.alt, i.complete && i.naturalWidth > 0])")
+        page.screenshot(path=str(ARTIFACTS / "report.png"), full_page=True)
+        browser.close()
+    assert errors == []
+    assert len(images) >= 12 and [alt for alt, ok in images if not ok] == []
+    assert all(url.startswith(("file:", "data:")) for url in requests)
