@@ -1,0 +1,151 @@
+"""Calibration of the coverings' eq. 2 parameters from tensile curves (Sec. 3.2).
+
+Plastic tubes: Nelder-Mead on (E, sigma_y, K, n) from literature initial guesses.
+Fabric tube: E and sigma_y from eq. 3 on the linear region of the measured
+curve, then Nelder-Mead on (K, n).  The objective is eq. 4: the l2 norm of the
+force error, the measured mean curve being resampled (linear interpolation) to
+the simulated displacement points inside the measured range.  The initial
+simplex is the initial guess plus 5 % per component (Sec. 3.2), as built by
+:func:`harnesspipe.calibrate.simplex.nelder_mead`.
+
+Initial guesses (``INITIAL_GUESS``):
+
+* polypropylene tubes: E = 1300 MPa, the modulus of PP homopolymer (Maier &
+  Calafut, *Polypropylene: The Definitive User's Guide*, 1998: 1.1-1.6 GPa);
+  sigma_y = 10 MPa, the end of the linear region of PP stress-strain curves at
+  room temperature (about a third of the 30-35 MPa tensile yield strength);
+  K = 30 MPa and n = 0.3, a moderately hardening power law reaching the
+  tensile yield strength at about 20 % plastic strain.  These play the role of
+  the paper's reference [43], which is not reproduced here.
+* PET fabric: E and sigma_y come from eq. 3; K = 40 MPa, n = 0.5.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from harnesspipe.calibrate.objective import l2_error
+from harnesspipe.calibrate.simplex import FitResult, nelder_mead
+from harnesspipe.models.tensile import FabricGeometry, simulate
+
+PARAMETERS = ("E", "sigma_y", "K", "n")
+INITIAL_GUESS = {
+    "closed_tube": {"E": 1300.0, "sigma_y": 10.0, "K": 30.0, "n": 0.3},
+    "open_tube": {"E": 1300.0, "sigma_y": 10.0, "K": 30.0, "n": 0.3},
+    "fabric_tube": {"K": 40.0, "n": 0.5},
+}
+
+
+@dataclass(frozen=True)
+class LinearRegion:
+    """Result of the eq. 3 analysis of a fabric curve."""
+
+    E: float
+    sigma_y: float
+    u_dev: float
+
+
+def force_error(measured: pd.DataFrame, simulated: pd.DataFrame) -> float:
+    """Eq. 4: ||F_exp - F_FE|| at the simulated displacements within the measured range."""
+    u_sim = simulated["displacement_mm"].to_numpy()
+    u_exp = measured["displacement_mm"].to_numpy()
+    inside = (u_sim >= u_exp.min()) & (u_sim <= u_exp.max())
+    f_exp = np.interp(u_sim[inside], u_exp, measured["force_N"].to_numpy())
+    return l2_error(f_exp, simulated["force_N"].to_numpy()[inside])
+
+
+def linear_region(measured: pd.DataFrame, gauge: float, area: float, *,
+                  linear_fraction: float = 0.1, tol: float = 0.002) -> LinearRegion:
+    """E and sigma_y by eq. 3, with u_dev detected from the data.
+
+    The curve is read as uniaxial stress at finite strain: log strain
+    eps = ln(1 + u/L) and true (Kirchhoff) stress tau = F (1 + u/L) / A, for which
+    the elastic part is exactly linear (for small u this is eq. 3 itself).
+
+    * E: least-squares slope of tau vs eps through the origin over the first
+      ``linear_fraction`` of the displacement range (must lie before yield);
+    * u_dev: first displacement from which the relative shortfall
+      1 - tau / (E eps) stays above ``tol``, located by linear interpolation
+      between the bracketing samples;
+    * sigma_y = E ln(1 + u_dev/L)   (eq. 3: E u_dev / L for small strain).
+    """
+    u = measured["displacement_mm"].to_numpy(dtype=float)
+    force = measured["force_N"].to_numpy(dtype=float)
+    keep = u > 0.0
+    u, force = u[keep], force[keep]
+    stretch = 1.0 + u / gauge
+    eps = np.log(stretch)
+    tau = force * stretch / area
+    lin = u <= linear_fraction * u.max()
+    if lin.sum() < 2:
+        raise ValueError("fewer than two samples in the linear region: refine the curve")
+    E = float(np.dot(eps[lin], tau[lin]) / np.dot(eps[lin], eps[lin]))
+    shortfall = 1.0 - tau / (E * eps)
+    above = shortfall > tol
+    stays = np.flatnonzero(above & np.flip(np.logical_and.accumulate(np.flip(above))))
+    if stays.size == 0 or stays[0] == 0:
+        raise ValueError("no departure from the linear elastic response was found in the curve")
+    j = stays[0]
+    w = (tol - shortfall[j - 1]) / (shortfall[j] - shortfall[j - 1])
+    u_dev = float(u[j - 1] + w * (u[j] - u[j - 1]))
+    if u_dev <= linear_fraction * u.max():
+        raise ValueError(f"the curve departs from linearity at u = {u_dev:.3g} mm, inside the "
+                         f"region used for E; lower linear_fraction")
+    return LinearRegion(E=E, sigma_y=E * float(np.log1p(u_dev / gauge)), u_dev=u_dev)
+
+
+def _fit(objective, x0: dict, *, xatol, fatol, maxfev, log_path) -> FitResult:
+    names = list(x0)
+    return nelder_mead(objective, np.array([x0[k] for k in names]), names,
+                       xatol=xatol, fatol=fatol, maxfev=maxfev, log_path=log_path)
+
+
+def calibrate_tube(component: str, measured: pd.DataFrame, *, initial: dict | None = None,
+                   preset: str = "default", nu: float | None = None, xatol: float = 1e-4,
+                   fatol: float = 1e-6, maxfev: int = 300, log_path=None, **sim_kwargs):
+    """Nelder-Mead on (E, sigma_y, K, n) of a plastic tube (``closed_tube``/``open_tube``).
+
+    ``measured``: mean curve with columns ``displacement_mm, force_N`` (half-model
+    displacement, as :func:`simulate`).  Returns (parameters dict, FitResult).
+    """
+    x0 = dict(initial or INITIAL_GUESS[component])
+
+    def objective(x):
+        if np.any(x <= 0.0):
+            return np.inf
+        E, sigma_y, K, n = x
+        return force_error(measured, simulate(component, E, sigma_y, K, n, nu, preset=preset,
+                                              **sim_kwargs))
+
+    fit = _fit(objective, x0, xatol=xatol, fatol=fatol, maxfev=maxfev, log_path=log_path)
+    return fit.params(), fit
+
+
+def calibrate_fabric(measured: pd.DataFrame, *, initial: dict | None = None,
+                     geometry: FabricGeometry = FabricGeometry(), preset: str = "default",
+                     nu: float | None = None, xatol: float = 1e-4, fatol: float = 1e-6,
+                     maxfev: int = 200, log_path=None, linear_fraction: float = 0.1,
+                     tol: float = 0.002, **sim_kwargs):
+    """Eq. 3 for (E, sigma_y), then Nelder-Mead on (K, n) of the fabric tube.
+
+    The simulation is pulled to the largest measured displacement.  Returns
+    (parameters dict with E, sigma_y, K, n, u_dev; FitResult of the (K, n) search).
+    """
+    region = linear_region(measured, geometry.gauge, geometry.area,
+                           linear_fraction=linear_fraction, tol=tol)
+    x0 = dict(initial or INITIAL_GUESS["fabric_tube"])
+    elongation = float(measured["displacement_mm"].max())
+
+    def objective(x):
+        if np.any(x <= 0.0):
+            return np.inf
+        K, n = x
+        sim = simulate("fabric_tube", region.E, region.sigma_y, K, n, nu, preset=preset,
+                       elongation=elongation, **sim_kwargs)
+        return force_error(measured, sim)
+
+    fit = _fit(objective, x0, xatol=xatol, fatol=fatol, maxfev=maxfev, log_path=log_path)
+    params = {"E": region.E, "sigma_y": region.sigma_y, **fit.params(), "u_dev": region.u_dev}
+    return params, fit

@@ -1,0 +1,533 @@
+"""Four-node finite-strain shell with translations and rotations (6 DOFs per node).
+
+Formulation (total Lagrangian, continuum-based / degenerated solid shell):
+
+* Geometry x(xi, eta, zeta) = sum_a N_a (x_a + zeta h/2 d_a) with nodal directors
+  d_a = Q_a D_a; the nodal rotations Q_a are updated multiplicatively by the
+  spin increments that are the rotational DOFs (Simo & Vu-Quoc 1986; Belytschko,
+  Liu & Moran 2000, Sec. 9.3-9.5).
+* In-plane strain at each of 2 x 2 x 5 Gauss points (5 through the thickness as in
+  the paper): the right Cauchy-Green tensor C in a local orthonormal frame, its
+  logarithm E_H = 1/2 ln C (closed-form 2 x 2 spectral decomposition), J2 plane
+  stress on E_H with additive plastic strain (Eterovic & Bathe 1990; Miehe, Apel &
+  Lambrecht 2002) and the second Piola-Kirchhoff stress S = T : dE_H/dE.
+* Transverse shear: MITC4 assumed natural strains tied at the edge midpoints
+  (Dvorkin & Bathe 1984), elastic with kappa_s = 5/6, as in Abaqus shells.
+* Drilling rotation: penalty tying each nodal triad to the element edge
+  (omega = e . s / |e|, energy 1/2 k_d omega^2, k_d = DRILL_FACTOR G h0 A), a
+  rotational "hourglass" control in the sense of the paper's Sec. 3.2.
+* Thickness: h = h0 exp(eps_33), eps_33 the element mean of the material's
+  through-thickness strain (plastic incompressibility + elastic Poisson), updated
+  once per converged step; reference volumes use h0.
+
+The internal force is analytical; the element tangent is its central finite
+difference with respect to nodal translations and spins, which contains the
+return mapping and is therefore the consistent (algorithmic) tangent to
+O(h^2) (Miehe 1996; Perez-Foguet, Rodriguez-Ferran & Huerta 2000).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from harnesspipe.fe.plane_stress import EPS33, STATE_SIZE, j2_plane_stress
+
+N_THICKNESS = 5
+ZETA, ZETA_W = np.polynomial.legendre.leggauss(N_THICKNESS)
+GP = 1.0 / np.sqrt(3.0)
+XI_GP = np.array([[-GP, -GP], [GP, -GP], [GP, GP], [-GP, GP]])
+XI_NODE = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+# MITC4 tying points: eps_xi_zeta at (0, -1), (0, 1); eps_eta_zeta at (-1, 0), (1, 0)
+TYING = np.array([[0.0, -1.0], [0.0, 1.0], [-1.0, 0.0], [1.0, 0.0]])
+SHEAR_CORRECTION = 5.0 / 6.0
+DRILL_FACTOR = 1.0e-3
+DOF_PER_NODE = 6
+FD_STEP = 1.0e-6  # relative perturbation for the finite-difference tangent
+
+
+@njit(cache=True)
+def shape(xi, eta, N, dN):
+    """Bilinear shape functions and their natural derivatives dN[a] = (dN/dxi, dN/deta)."""
+    for a in range(4):
+        sa, ta = XI_NODE[a, 0], XI_NODE[a, 1]
+        N[a] = 0.25 * (1.0 + sa * xi) * (1.0 + ta * eta)
+        dN[a, 0] = 0.25 * sa * (1.0 + ta * eta)
+        dN[a, 1] = 0.25 * ta * (1.0 + sa * xi)
+
+
+@njit(cache=True)
+def _cross(a, b, out):
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+@njit(cache=True)
+def rotate(v, axis, angle, out):
+    """Rodrigues rotation of ``v`` by ``angle`` about the unit vector ``axis``."""
+    c, s = np.cos(angle), np.sin(angle)
+    k_dot_v = axis[0] * v[0] + axis[1] * v[1] + axis[2] * v[2]
+    kx = axis[1] * v[2] - axis[2] * v[1]
+    ky = axis[2] * v[0] - axis[0] * v[2]
+    kz = axis[0] * v[1] - axis[1] * v[0]
+    out[0] = v[0] * c + kx * s + axis[0] * k_dot_v * (1.0 - c)
+    out[1] = v[1] * c + ky * s + axis[1] * k_dot_v * (1.0 - c)
+    out[2] = v[2] * c + kz * s + axis[2] * k_dot_v * (1.0 - c)
+
+
+@njit(cache=True)
+def rotation_matrix(theta, R):
+    """exp of the skew matrix of the rotation vector ``theta`` (Rodrigues)."""
+    angle = np.sqrt(theta[0] ** 2 + theta[1] ** 2 + theta[2] ** 2)
+    R[:, :] = 0.0
+    for i in range(3):
+        R[i, i] = 1.0
+    if angle < 1e-300:
+        return
+    k0, k1, k2 = theta[0] / angle, theta[1] / angle, theta[2] / angle
+    c, s = np.cos(angle), np.sin(angle)
+    k = (k0, k1, k2)
+    for i in range(3):
+        for j in range(3):
+            R[i, j] = c * (1.0 if i == j else 0.0) + (1.0 - c) * k[i] * k[j]
+    R[0, 1] -= s * k2
+    R[0, 2] += s * k1
+    R[1, 0] += s * k2
+    R[1, 2] -= s * k0
+    R[2, 0] -= s * k1
+    R[2, 1] += s * k0
+
+
+@njit(cache=True)
+def reference_element(X, D, h0, Jinv, dV, shear_ref, S0, area):
+    """Constant reference data of one element.
+
+    ``X`` (4, 3) nodes, ``D`` (4, 3) nodal directors.  Writes ``Jinv`` (4, 5, 3, 3):
+    inverse of J[k, i] = e_k . G_i in the local frame (e1 along G_xi, e3 along the
+    interpolated director), ``dV`` (4, 5) Gauss weights times reference volume,
+    ``shear_ref`` (4,) G_i . G_zeta at the MITC4 tying points, ``S0`` (4, 3) the
+    third vector D x T of each node's triad (T: unit edge to the next node,
+    orthogonal to D).  Returns the reference area.
+    """
+    N = np.empty(4)
+    dN = np.empty((4, 2))
+    J = np.empty((3, 3))
+    G = np.empty((3, 3))
+    e = np.empty((3, 3))
+    area[0] = 0.0
+    for g in range(4):
+        shape(XI_GP[g, 0], XI_GP[g, 1], N, dN)
+        for z in range(N_THICKNESS):
+            zeta = ZETA[z]
+            G[:, :] = 0.0
+            for a in range(4):
+                for i in range(3):
+                    G[i, 0] += dN[a, 0] * (X[a, i] + zeta * 0.5 * h0 * D[a, i])
+                    G[i, 1] += dN[a, 1] * (X[a, i] + zeta * 0.5 * h0 * D[a, i])
+                    G[i, 2] += N[a] * 0.5 * h0 * D[a, i]
+            e3 = G[:, 2] / np.sqrt(np.sum(G[:, 2] ** 2))
+            e1 = G[:, 0].copy()
+            e1 -= np.dot(e1, e3) * e3
+            e1 /= np.sqrt(np.sum(e1 ** 2))
+            e2 = np.empty(3)
+            _cross(e3, e1, e2)
+            e[0], e[1], e[2] = e1, e2, e3
+            for k in range(3):
+                for i in range(3):
+                    J[k, i] = e[k, 0] * G[0, i] + e[k, 1] * G[1, i] + e[k, 2] * G[2, i]
+            detJ = np.linalg.det(J)
+            Jinv[g, z] = np.linalg.inv(J)
+            dV[g, z] = detJ * ZETA_W[z]
+            if z == N_THICKNESS // 2:
+                area[0] += detJ / (0.5 * h0)
+    for p in range(4):
+        shape(TYING[p, 0], TYING[p, 1], N, dN)
+        col = 0 if p < 2 else 1
+        gi = np.zeros(3)
+        gz = np.zeros(3)
+        for a in range(4):
+            gi += dN[a, col] * X[a]
+            gz += N[a] * 0.5 * h0 * D[a]
+        shear_ref[p] = np.dot(gi, gz)
+    for a in range(4):
+        edge = X[(a + 1) % 4] - X[a]
+        T = edge - np.dot(edge, D[a]) * D[a]
+        T /= np.sqrt(np.sum(T ** 2))
+        s = np.empty(3)
+        _cross(D[a], T, s)
+        S0[a] = s
+    return area[0]
+
+
+@njit(cache=True)
+def _spectral(C11, C22, C12):
+    """Eigenvalues c1 >= c2 and the angle of the first eigenvector of a sym. 2 x 2."""
+    mean = 0.5 * (C11 + C22)
+    rad = np.sqrt((0.5 * (C11 - C22)) ** 2 + C12 * C12)
+    angle = 0.5 * np.arctan2(2.0 * C12, C11 - C22)
+    return mean + rad, mean - rad, angle
+
+
+@njit(cache=True)
+def _hencky(C11, C22, C12, eps):
+    """(eps_11, eps_22, gamma_12) of E_H = 1/2 ln C; returns (c1, c2, cos, sin)."""
+    c1, c2, angle = _spectral(C11, C22, C12)
+    co, si = np.cos(angle), np.sin(angle)
+    l1, l2 = 0.5 * np.log(c1), 0.5 * np.log(c2)
+    eps[0] = l1 * co * co + l2 * si * si
+    eps[1] = l1 * si * si + l2 * co * co
+    eps[2] = 2.0 * (l1 - l2) * co * si
+    return c1, c2, co, si
+
+
+@njit(cache=True)
+def _second_piola(sig, c1, c2, co, si):
+    """S = T : dE_H/dE for T = (T11, T22, T12); returns (S11, S22, S12)."""
+    t11 = co * co * sig[0] + 2.0 * co * si * sig[2] + si * si * sig[1]
+    t22 = si * si * sig[0] - 2.0 * co * si * sig[2] + co * co * sig[1]
+    t12 = -co * si * sig[0] + (co * co - si * si) * sig[2] + co * si * sig[1]
+    if abs(c1 - c2) > 1e-10 * c1:
+        ratio = (np.log(c1) - np.log(c2)) / (c1 - c2)
+    else:
+        ratio = 1.0 / c1
+    s11, s22, s12 = t11 / c1, t22 / c2, t12 * ratio
+    S11 = co * co * s11 - 2.0 * co * si * s12 + si * si * s22
+    S22 = si * si * s11 + 2.0 * co * si * s12 + co * co * s22
+    S12 = co * si * s11 + (co * co - si * si) * s12 - co * si * s22
+    return S11, S22, S12
+
+
+@njit(cache=True)
+def work_arrays():
+    """Scratch arrays of :func:`element_force`, allocated once per assembly."""
+    return (np.empty(4), np.empty((4, 2)), np.empty((3, 3)), np.empty((2, 3)), np.empty((2, 3)),
+            np.empty(3), np.empty(3), np.empty((3, 3)), np.empty(4), np.empty((4, 4)),
+            np.empty(3), np.empty(3), np.empty(4), np.empty((4, 3)), np.empty((4, 3)))
+
+
+@njit(cache=True)
+def element_force(x, d, s, Jinv, dV, shear_ref, area, h0, h, mat, state_old, state_new, fe, work):
+    """Internal force ``fe`` (4, 6) (forces, moments) of one element.
+
+    ``x`` (4, 3) current nodes, ``d`` (4, 3) current directors, ``s`` (4, 3) current
+    third triad vectors, reference data from :func:`reference_element`,
+    ``mat`` = (E, nu, sigma_y, K, n), history (4 * 5, STATE_SIZE), ``work`` from
+    :func:`work_arrays`.
+    """
+    E, nu, sigma_y, K, n = mat[0], mat[1], mat[2], mat[3], mat[4]
+    G = E / (2.0 * (1.0 + nu))
+    N, dN, g, f, P, eps, sig, Dm, w4, w44, tmp, mom, gam, gi_t, gz_t = work
+    fe[:, :] = 0.0
+    # MITC4 covariant transverse shear at the tying points (director length h0)
+    for p in range(4):
+        shape(TYING[p, 0], TYING[p, 1], N, dN)
+        col = 0 if p < 2 else 1
+        gi_t[p] = 0.0
+        gz_t[p] = 0.0
+        for a in range(4):
+            gi_t[p] += dN[a, col] * x[a]
+            gz_t[p] += N[a] * 0.5 * h0 * d[a]
+        gam[p] = np.dot(gi_t[p], gz_t[p]) - shear_ref[p]
+    for gp in range(4):
+        xi, eta = XI_GP[gp, 0], XI_GP[gp, 1]
+        shape(xi, eta, N, dN)
+        for z in range(N_THICKNESS):
+            zc = 0.5 * h * ZETA[z]
+            g[:, :] = 0.0
+            for a in range(4):
+                for i in range(3):
+                    g[0, i] += dN[a, 0] * (x[a, i] + zc * d[a, i])
+                    g[1, i] += dN[a, 1] * (x[a, i] + zc * d[a, i])
+                    g[2, i] += N[a] * 0.5 * h * d[a, i]
+            Ji = Jinv[gp, z]
+            for l in range(2):
+                for i in range(3):
+                    f[l, i] = g[0, i] * Ji[0, l] + g[1, i] * Ji[1, l] + g[2, i] * Ji[2, l]
+            C11 = np.dot(f[0], f[0])
+            C22 = np.dot(f[1], f[1])
+            C12 = np.dot(f[0], f[1])
+            c1, c2, co, si = _hencky(C11, C22, C12, eps)
+            k = gp * N_THICKNESS + z
+            j2_plane_stress(eps, state_old[k], E, nu, sigma_y, K, n, sig, Dm, state_new[k], w4, w44)
+            S11, S22, S12 = _second_piola(sig, c1, c2, co, si)
+            for i in range(3):
+                P[0, i] = S11 * f[0, i] + S12 * f[1, i]
+                P[1, i] = S12 * f[0, i] + S22 * f[1, i]
+            w = dV[gp, z]
+            for a in range(4):
+                b0 = dN[a, 0] * Ji[0, 0] + dN[a, 1] * Ji[1, 0]
+                b1 = dN[a, 0] * Ji[0, 1] + dN[a, 1] * Ji[1, 1]
+                m0 = zc * b0 + 0.5 * h * N[a] * Ji[2, 0]
+                m1 = zc * b1 + 0.5 * h * N[a] * Ji[2, 1]
+                for i in range(3):
+                    fe[a, i] += w * (b0 * P[0, i] + b1 * P[1, i])
+                    tmp[i] = w * (m0 * P[0, i] + m1 * P[1, i])
+                _cross(d[a], tmp, mom)
+                for i in range(3):
+                    fe[a, 3 + i] += mom[i]
+        # transverse shear at this in-plane point, constant through the thickness
+        Ji = Jinv[gp, N_THICKNESS // 2]
+        vol = 0.0
+        for z in range(N_THICKNESS):
+            vol += dV[gp, z]
+        g_xi = 0.5 * (1.0 - eta) * gam[0] + 0.5 * (1.0 + eta) * gam[1]
+        g_eta = 0.5 * (1.0 - xi) * gam[2] + 0.5 * (1.0 + xi) * gam[3]
+        for kk in range(2):
+            a_xi = Ji[0, kk] * Ji[2, 2]
+            a_eta = Ji[1, kk] * Ji[2, 2]
+            tau = vol * SHEAR_CORRECTION * G * (a_xi * g_xi + a_eta * g_eta)
+            weights = (a_xi * 0.5 * (1.0 - eta), a_xi * 0.5 * (1.0 + eta),
+                       a_eta * 0.5 * (1.0 - xi), a_eta * 0.5 * (1.0 + xi))
+            for p in range(4):
+                _shear_variation(p, weights[p] * tau, x, d, gi_t[p], gz_t[p], h0, fe, N, dN, tmp)
+    _drilling(x, s, DRILL_FACTOR * G * h0 * area, fe, tmp)
+
+
+@njit(cache=True)
+def _shear_variation(p, coef, x, d, gi, gz, h0, fe, N, dN, tmp):
+    """Add coef * d(g_i . g_zeta)/dq at tying point ``p`` to ``fe``."""
+    shape(TYING[p, 0], TYING[p, 1], N, dN)
+    col = 0 if p < 2 else 1
+    for a in range(4):
+        for i in range(3):
+            fe[a, i] += coef * dN[a, col] * gz[i]
+        _cross(d[a], gi, tmp)
+        for i in range(3):
+            fe[a, 3 + i] += coef * 0.5 * h0 * N[a] * tmp[i]
+
+
+@njit(cache=True)
+def _drilling(x, s, k_d, fe, tmp):
+    """Drilling penalty: omega_a = e . s_a / |e|, e the edge from node a to the next."""
+    for a in range(4):
+        b = (a + 1) % 4
+        e = x[b] - x[a]
+        L = np.sqrt(np.sum(e ** 2))
+        omega = np.dot(e, s[a]) / L
+        c = k_d * omega
+        for i in range(3):
+            de = s[a, i] / L - omega * e[i] / (L * L)
+            fe[b, i] += c * de
+            fe[a, i] -= c * de
+        _cross(s[a], e, tmp)
+        for i in range(3):
+            fe[a, 3 + i] += c * tmp[i] / L
+
+
+@njit(cache=True)
+def element_tangent(x, d, s, Jinv, dV, shear_ref, area, h0, h, mat, state_old, scratch,
+                    active, ke, fp, fm, xp, dp, sp_, axis, work):
+    """Central-difference tangent ``ke`` (24, 24) of :func:`element_force`; columns of
+    inactive DOFs (``active[j] == False``, held fixed) are left zero."""
+    scale = 0.0
+    for a in range(4):
+        for i in range(3):
+            scale = max(scale, abs(x[a, i] - x[0, i]))
+    hu = FD_STEP * max(scale, 1e-12)
+    ke[:, :] = 0.0
+    for j in range(24):
+        if not active[j]:
+            continue
+        a, c = j // 6, j % 6
+        for sign in (1.0, -1.0):
+            xp[:, :] = x
+            dp[:, :] = d
+            sp_[:, :] = s
+            if c < 3:
+                xp[a, c] += sign * hu
+            else:
+                axis[:] = 0.0
+                axis[c - 3] = 1.0
+                rotate(d[a], axis, sign * FD_STEP, dp[a])
+                rotate(s[a], axis, sign * FD_STEP, sp_[a])
+            out = fp if sign > 0 else fm
+            element_force(xp, dp, sp_, Jinv, dV, shear_ref, area, h0, h, mat, state_old, scratch, out,
+                          work)
+        step = 2.0 * (hu if c < 3 else FD_STEP)
+        for b in range(4):
+            for i in range(6):
+                ke[6 * b + i, j] = (fp[b, i] - fm[b, i]) / step
+
+
+@njit(cache=True)
+def assemble(conn, x, Q, D, S0, Jinv, dV, shear_ref, area, h0, h, mat, state_old, state_new,
+             active, f, kdata):
+    """Internal force ``f`` and element tangents ``kdata`` (n_el, 576) in the order of
+    :func:`tangent_pattern`.  ``x`` (n_nodes, 3) current nodes, ``Q`` (n_nodes, 3, 3)
+    nodal rotations, ``D`` (n_nodes, 3) reference directors, ``S0`` (n_el, 4, 3),
+    reference data per element, ``active`` (6 n_nodes,) DOFs that may move."""
+    f[:] = 0.0
+    xe = np.empty((4, 3))
+    de = np.empty((4, 3))
+    se = np.empty((4, 3))
+    fe = np.empty((4, 6))
+    ke = np.empty((24, 24))
+    fp = np.empty((4, 6))
+    fm = np.empty((4, 6))
+    xp = np.empty((4, 3))
+    dp = np.empty((4, 3))
+    sp_ = np.empty((4, 3))
+    axis = np.empty(3)
+    act = np.empty(24, dtype=np.bool_)
+    scratch = np.empty((4 * N_THICKNESS, STATE_SIZE))
+    work = work_arrays()
+    for e in range(conn.shape[0]):
+        for a in range(4):
+            node = conn[e, a]
+            for i in range(3):
+                xe[a, i] = x[node, i]
+                de[a, i] = Q[node, i, 0] * D[node, 0] + Q[node, i, 1] * D[node, 1] + Q[node, i, 2] * D[node, 2]
+                se[a, i] = (Q[node, i, 0] * S0[e, a, 0] + Q[node, i, 1] * S0[e, a, 1]
+                            + Q[node, i, 2] * S0[e, a, 2])
+            for i in range(6):
+                act[6 * a + i] = active[6 * node + i]
+        element_force(xe, de, se, Jinv[e], dV[e], shear_ref[e], area[e], h0, h[e], mat,
+                      state_old[e], state_new[e], fe, work)
+        element_tangent(xe, de, se, Jinv[e], dV[e], shear_ref[e], area[e], h0, h[e], mat,
+                        state_old[e], scratch, act, ke, fp, fm, xp, dp, sp_, axis, work)
+        for a in range(4):
+            node = conn[e, a]
+            for i in range(6):
+                f[6 * node + i] += fe[a, i]
+        for i in range(24):
+            for j in range(24):
+                kdata[e, 24 * i + j] = ke[i, j]
+
+
+def tangent_pattern(conn):
+    """Global (row, col) of every entry of ``kdata`` from :func:`assemble`."""
+    dofs = (DOF_PER_NODE * np.asarray(conn)[:, :, None] + np.arange(DOF_PER_NODE)).reshape(-1, 24)
+    rows = np.repeat(dofs, 24, axis=1).ravel()
+    cols = np.tile(dofs, (1, 24)).ravel()
+    return rows, cols
+
+
+@njit(cache=True)
+def update_rotations(Q, dtheta):
+    """Q_a <- exp(dtheta_a) Q_a for every node (``dtheta`` (n_nodes, 3) spins)."""
+    R = np.empty((3, 3))
+    for a in range(Q.shape[0]):
+        rotation_matrix(dtheta[a], R)
+        Q[a] = R @ Q[a]
+
+
+@njit(cache=True)
+def updated_thickness(h0, state):
+    """Element thickness h0 exp(mean eps_33 of its Gauss points)."""
+    h = np.empty(state.shape[0])
+    for e in range(state.shape[0]):
+        h[e] = h0 * np.exp(np.mean(state[e, :, EPS33]))
+    return h
+
+
+def lumped_mass(X, conn, h0, rho):
+    """Row-sum lumped mass per DOF (6 per node): rho h0 A / 4 on translations and
+    rho h0^3 / 12 A / 4 on rotations, A the element area (diagonal of quadrilaterals)."""
+    X = np.asarray(X, float)
+    m = np.zeros(DOF_PER_NODE * X.shape[0])
+    for nodes in np.asarray(conn):
+        p = X[nodes]
+        A = 0.5 * np.linalg.norm(np.cross(p[2] - p[0], p[3] - p[1]))
+        for node in nodes:
+            m[6 * node:6 * node + 3] += rho * h0 * A / 4.0
+            m[6 * node + 3:6 * node + 6] += rho * h0**3 / 12.0 * A / 4.0
+    return m
+
+
+def nodal_normals(X, conn):
+    """Unit nodal directors: normalised sum of the normals of the adjacent elements."""
+    X = np.asarray(X, float)
+    D = np.zeros_like(X)
+    for nodes in np.asarray(conn):
+        p = X[nodes]
+        normal = np.cross(p[2] - p[0], p[3] - p[1])
+        D[nodes] += normal / np.linalg.norm(normal)
+    return D / np.linalg.norm(D, axis=1)[:, None]
+
+
+class Shell:
+    """A mesh of 4-node shells with its configuration and history, as a
+    :class:`harnesspipe.fe.shell_static.System` (DOFs ux, uy, uz, spin x, y, z).
+
+    ``hold(dofs)`` marks DOFs that never move (their tangent columns are skipped);
+    ``contact`` = (nodes, axis, stiffness): penalty keeping x[nodes, axis] >= 0
+    (a rigid plane, used for a mirror-symmetric self-contact).
+    """
+
+    def __init__(self, X, conn, h0, E, nu, sigma_y, K, n, directors=None, contact=None):
+        import scipy.sparse as sp  # local: the kernels above do not need it
+
+        self._sp = sp
+        self.X = np.ascontiguousarray(X, dtype=float)
+        self.conn = np.ascontiguousarray(conn, dtype=np.int64)
+        self.h0 = float(h0)
+        self.mat = np.array([E, nu, sigma_y, K, n], dtype=float)
+        n_nodes, n_el = self.X.shape[0], self.conn.shape[0]
+        self.D = np.ascontiguousarray(nodal_normals(X, conn) if directors is None else directors,
+                                      dtype=float)
+        self.Jinv = np.empty((n_el, 4, N_THICKNESS, 3, 3))
+        self.dV = np.empty((n_el, 4, N_THICKNESS))
+        self.shear_ref = np.empty((n_el, 4))
+        self.S0 = np.empty((n_el, 4, 3))
+        self.area = np.empty(n_el)
+        cell = np.empty(1)
+        for e, nodes in enumerate(self.conn):
+            self.area[e] = reference_element(self.X[nodes], self.D[nodes], self.h0, self.Jinv[e],
+                                             self.dV[e], self.shear_ref[e], self.S0[e], cell)
+        self.n_dof = DOF_PER_NODE * n_nodes
+        self.active = np.ones(self.n_dof, dtype=np.bool_)
+        self.contact = contact
+        self.x = self.X.copy()
+        self.Q = np.tile(np.eye(3), (n_nodes, 1, 1))
+        self.h = np.full(n_el, self.h0)
+        self.state = np.zeros((n_el, 4 * N_THICKNESS, STATE_SIZE))
+        self._trial = self.state.copy()
+        self._saved = (self.x.copy(), self.Q.copy())
+        self._rows, self._cols = tangent_pattern(self.conn)
+        self._f = np.zeros(self.n_dof)
+        self._kdata = np.zeros((n_el, 576))
+
+    @property
+    def u(self):
+        """Nodal displacements (n_nodes, 3)."""
+        return self.x - self.X
+
+    def directors(self):
+        """Current nodal directors Q_a D_a."""
+        return np.einsum("aij,aj->ai", self.Q, self.D)
+
+    def hold(self, dofs):
+        self.active[np.asarray(dofs, dtype=np.int64)] = False
+
+    def tangent_and_force(self):
+        assemble(self.conn, self.x, self.Q, self.D, self.S0, self.Jinv, self.dV, self.shear_ref,
+                 self.area, self.h0, self.h, self.mat, self.state, self._trial, self.active,
+                 self._f, self._kdata)
+        K = self._sp.coo_matrix((self._kdata.ravel(), (self._rows, self._cols)),
+                                shape=(self.n_dof, self.n_dof)).tocsr()
+        if self.contact is not None:
+            K = K + self._contact(self._f)
+        return K, self._f
+
+    def _contact(self, f):
+        nodes, axis, k = self.contact
+        gap = self.x[nodes, axis]
+        closed = gap < 0.0
+        dofs = DOF_PER_NODE * np.asarray(nodes)[closed] + axis
+        f[dofs] += k * gap[closed]
+        diag = np.zeros(self.n_dof)
+        diag[dofs] = k
+        return self._sp.diags(diag)
+
+    def advance(self, du):
+        du = du.reshape(-1, DOF_PER_NODE)
+        self.x += du[:, :3]
+        update_rotations(self.Q, np.ascontiguousarray(du[:, 3:]))
+
+    def accept(self):
+        self.state[...] = self._trial
+        self.h = updated_thickness(self.h0, self.state)
+        self._saved = (self.x.copy(), self.Q.copy())
+
+    def reject(self):
+        self.x[...], self.Q[...] = self._saved
