@@ -2,7 +2,7 @@
 
 Section quadrature (polar product rule): Gauss-Legendre in the radius with the
 Jacobian ``r`` folded into the weights, times the midpoint (trapezoidal) rule in
-the angle.  With ``n_rings`` >= 2 and ``n_theta`` >= 3 it integrates the area,
+the angle.  With ``n_rings`` >= 2 and ``n_sectors`` >= 3 it integrates the area,
 the first and the second moments of the disc exactly (A = pi r^2,
 I = pi r^4 / 4); plastic resultants converge as the rule is refined.
 
@@ -20,22 +20,22 @@ from numba import njit
 from harnesspipe.fe.hardening import hardening_slope, plastic_increment
 
 
-def disc_fibres(radius: float, n_rings: int = 4, n_theta: int = 16):
+def disc_fibres(radius: float, n_rings: int = 4, n_sectors: int = 16):
     """Fibre coordinates ``y, z`` and areas ``A`` of a disc of ``radius``.
 
     Rings at the Gauss-Legendre points of [0, radius] (weight ``r dr``), each split
-    into ``n_theta`` equal sectors whose centres are offset by half a sector, so no
+    into ``n_sectors`` equal sectors whose centres are offset by half a sector, so no
     fibre sits on a symmetry axis.
     """
-    if n_rings < 1 or n_theta < 3:
-        raise ValueError("disc_fibres needs n_rings >= 1 and n_theta >= 3")
+    if n_rings < 1 or n_sectors < 3:
+        raise ValueError("disc_fibres needs n_rings >= 1 and n_sectors >= 3")
     x, w = np.polynomial.legendre.leggauss(n_rings)
     r = 0.5 * radius * (1.0 + x)
     w_r = 0.5 * radius * w * r                      # int_0^R f(r) r dr
-    theta = (np.arange(n_theta) + 0.5) * (2.0 * np.pi / n_theta)
+    theta = (np.arange(n_sectors) + 0.5) * (2.0 * np.pi / n_sectors)
     y = np.outer(r, np.cos(theta)).ravel()
     z = np.outer(r, np.sin(theta)).ravel()
-    area = np.repeat(w_r * (2.0 * np.pi / n_theta), n_theta)
+    area = np.repeat(w_r * (2.0 * np.pi / n_sectors), n_sectors)
     return y, z, area
 
 

@@ -239,3 +239,19 @@ def kh_matrix(theta, v, tinv, m, out):
             for k in range(3):
                 s += m[i, k] * tinv[k, j]
             out[i, j] = s
+
+
+@njit(cache=True)
+def rotate_nodes(quat, dw):
+    """Apply the spatial spins ``dw`` (n, 3) to the nodal quaternions ``quat`` (n, 4)."""
+    work4 = np.empty(4)
+    for k in range(quat.shape[0]):
+        rotate_spatial(quat[k], dw[k], work4)
+
+
+@njit(cache=True)
+def in_plane_angle(q):
+    """Angle of the rotated x axis about z, atan2(R10, R00) (planar problems)."""
+    r00 = q[0] * q[0] + q[1] * q[1] - q[2] * q[2] - q[3] * q[3]
+    r10 = 2.0 * (q[1] * q[2] + q[0] * q[3])
+    return np.arctan2(r10, r00)

@@ -1,0 +1,317 @@
+"""Penalty contact of beam elements with rigid cylinders, with regularised Coulomb friction.
+
+Geometry.  The beam is a tube of radius ``r_beam`` around its centreline; a rigid
+cylinder has an axis through ``centre`` along the unit vector ``axis`` and radius
+``R``.  The gap is the distance of the centreline from the axis minus ``R + r_beam``.
+The centreline of each co-rotational element is its local cubic (Hermite)
+interpolation of the nodal rotations, so the closest point slides smoothly along
+the beam instead of jumping from node to node (beam-to-rigid-surface contact,
+Wriggers 2006, ch. 11, with the closest point found by Newton on the element
+parameter xi in [0, 1]).  A closest point at an element end is counted once: by the
+element it is interior to, or at a kink by the element after the node.
+
+Transfer.  The contact point moves with the nodal variations through the linear
+Bernoulli interpolation in the co-rotated frame: axial part linear, transverse part
+Hermite cubic (H1, l H2, H3, l H4) in the nodal translations and spins.  This ``T``
+(3x12) is exact for rigid motions; the tangent neglects the variation of T and of
+the closest-point parameter (an approximate but robust Newton matrix).
+
+Normal law: ``p = k_n max(-g, 0)``.  Friction (optional, mu > 0): tangential
+penalty ``k_t`` in the plane normal to the axis, trial ``f_t = f_t,old + k_t dg_t``
+with ``dg_t`` the tangential slip of the material point since the last converged
+increment, return to ``|f_t| = mu p`` when it slips.  The tangential history is
+kept per (cylinder, element) and committed by the caller; when the contact point
+crosses a node its stick force restarts at zero (immaterial once sliding).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from harnesspipe.fe.beam import corotated_frame, local_rotation, scatter_element
+from harnesspipe.fe.rotation import quat_mul, quat_to_matrix, rotvec_from_quat
+
+NEWTON_IT = 20
+# A closest point with a gap below ACTIVE_GAP * (R + r_beam) enters the tangent even
+# when it carries no force: the linearised gap misses the second-order change as the
+# beam slides over a cylinder, and a support dropped for one iterate leaves a mechanism.
+ACTIVE_GAP = 1.0e-2
+FAR, INTERIOR, AT_START, AT_END = 0, 1, 2, 3
+
+
+@njit(cache=True)
+def centreline(xi, x1, Rr, ln, th1, th2, X, dX, ddX):
+    """Point, first and second xi-derivative of the element's cubic centreline."""
+    h2 = xi * (1.0 - xi) ** 2
+    h4 = -xi * xi * (1.0 - xi)
+    d2 = 1.0 - 4.0 * xi + 3.0 * xi * xi
+    d4 = -2.0 * xi + 3.0 * xi * xi
+    dd2 = -4.0 + 6.0 * xi
+    dd4 = -2.0 + 6.0 * xi
+    v = ln * (h2 * th1[2] + h4 * th2[2])
+    w = -ln * (h2 * th1[1] + h4 * th2[1])
+    dv = ln * (d2 * th1[2] + d4 * th2[2])
+    dw = -ln * (d2 * th1[1] + d4 * th2[1])
+    ddv = ln * (dd2 * th1[2] + dd4 * th2[2])
+    ddw = -ln * (dd2 * th1[1] + dd4 * th2[1])
+    for i in range(3):
+        X[i] = x1[i] + xi * ln * Rr[i, 0] + v * Rr[i, 1] + w * Rr[i, 2]
+        dX[i] = ln * Rr[i, 0] + dv * Rr[i, 1] + dw * Rr[i, 2]
+        ddX[i] = ddv * Rr[i, 1] + ddw * Rr[i, 2]
+
+
+@njit(cache=True)
+def _perp(v, axis, out):
+    """Component of v normal to the unit vector ``axis``."""
+    d = v[0] * axis[0] + v[1] * axis[1] + v[2] * axis[2]
+    for i in range(3):
+        out[i] = v[i] - d * axis[i]
+
+
+@njit(cache=True)
+def closest_point(x1, Rr, ln, th1, th2, centre, axis, X, dX, ddX, dp, tp):
+    """Parameter xi in [0, 1] of the centreline point closest to the cylinder axis.
+
+    Minimises phi = |P (X(xi) - C)|^2 / 2 by Newton with the root kept in [0, 1].
+    Returns (xi, status): INTERIOR (a minimum inside), AT_START / AT_END (clamped at an
+    end, distance growing into the element) or FAR (a maximum).
+    """
+    # start from the projection of the axis point on the chord
+    for i in range(3):
+        dp[i] = centre[i] - x1[i]
+    _perp(dp, axis, dp)
+    _perp(Rr[:, 0], axis, tp)
+    den = tp[0] ** 2 + tp[1] ** 2 + tp[2] ** 2
+    xi = (dp[0] * tp[0] + dp[1] * tp[1] + dp[2] * tp[2]) / (ln * den) if den > 0.0 else 0.5
+    xi = min(max(xi, 0.0), 1.0)
+    for _ in range(NEWTON_IT):
+        centreline(xi, x1, Rr, ln, th1, th2, X, dX, ddX)
+        for i in range(3):
+            dp[i] = X[i] - centre[i]
+        _perp(dp, axis, dp)
+        _perp(dX, axis, tp)
+        g1 = dp[0] * dX[0] + dp[1] * dX[1] + dp[2] * dX[2]
+        g2 = tp[0] ** 2 + tp[1] ** 2 + tp[2] ** 2 + dp[0] * ddX[0] + dp[1] * ddX[1] + dp[2] * ddX[2]
+        if g2 <= 0.0:
+            g2 = tp[0] ** 2 + tp[1] ** 2 + tp[2] ** 2
+        step = -g1 / g2
+        xi_new = min(max(xi + step, 0.0), 1.0)
+        if abs(xi_new - xi) < 1e-13:
+            xi = xi_new
+            break
+        xi = xi_new
+    centreline(xi, x1, Rr, ln, th1, th2, X, dX, ddX)
+    for i in range(3):
+        dp[i] = X[i] - centre[i]
+    _perp(dp, axis, dp)
+    _perp(dX, axis, tp)
+    slope = dp[0] * dX[0] + dp[1] * dX[1] + dp[2] * dX[2]
+    curv = tp[0] ** 2 + tp[1] ** 2 + tp[2] ** 2 + dp[0] * ddX[0] + dp[1] * ddX[1] + dp[2] * ddX[2]
+    if xi <= 0.0 and slope >= 0.0:
+        return xi, AT_START
+    if xi >= 1.0 and slope <= 0.0:
+        return xi, AT_END
+    if curv <= 0.0:  # a distance maximum (the beam wraps the cylinder): not a contact point
+        return xi, FAR
+    return xi, INTERIOR
+
+
+@njit(cache=True)
+def transfer_matrix(xi, Rr, ln, T):
+    """T (3x12): variation of the contact point from the element's nodal variations."""
+    h1 = 1.0 - 3.0 * xi * xi + 2.0 * xi ** 3
+    h3 = 3.0 * xi * xi - 2.0 * xi ** 3
+    h2 = ln * xi * (1.0 - xi) ** 2
+    h4 = -ln * xi * xi * (1.0 - xi)
+    for i in range(3):
+        for j in range(3):
+            rr = Rr[i, 0] * Rr[j, 0]
+            pp = (1.0 if i == j else 0.0) - rr
+            T[i, j] = (1.0 - xi) * rr + h1 * pp
+            T[i, 6 + j] = xi * rr + h3 * pp
+    # w x r1 = -S(r1) w
+    r = Rr[:, 0]
+    for blk, h in ((3, h2), (9, h4)):
+        T[0, blk + 0] = 0.0
+        T[0, blk + 1] = h * r[2]
+        T[0, blk + 2] = -h * r[1]
+        T[1, blk + 0] = -h * r[2]
+        T[1, blk + 1] = 0.0
+        T[1, blk + 2] = h * r[0]
+        T[2, blk + 0] = h * r[1]
+        T[2, blk + 1] = -h * r[0]
+        T[2, blk + 2] = 0.0
+
+
+@njit(cache=True)
+def _increment(u, u_c, quat, quat_c, a, b, dp, qw, tv):
+    """Nodal increments since the committed state (translations, spatial rotation vectors)."""
+    for node in range(2):
+        k = a if node == 0 else b
+        for i in range(3):
+            dp[6 * node + i] = u[k, i] - u_c[k, i]
+        # q_inc = q * conj(q_c)
+        qw[0] = quat_c[k, 0]
+        qw[1] = -quat_c[k, 1]
+        qw[2] = -quat_c[k, 2]
+        qw[3] = -quat_c[k, 3]
+        quat_mul(quat[k], qw, qw)
+        rotvec_from_quat(qw, tv)
+        for i in range(3):
+            dp[6 * node + 3 + i] = tv[i]
+
+
+@njit(cache=True)
+def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axes, radii,
+                     r_beam, k_n, mu, k_t, ft_c, ft_t, want_tangent, f, band, bw,
+                     reactions, status, xis):
+    """Add the contact residual (and tangent) of all cylinders to ``f`` (and ``band``).
+
+    ``f`` is a resistance (internal minus external): contact forces enter with a minus
+    sign.  ``reactions[c]`` receives the total force of the beam on cylinder c.
+    ``ft_t[c, e]`` receives the trial tangential force; ``ft_c`` is only read.
+    ``status``/``xis`` (n_elements) are work arrays.
+    """
+    M = np.empty((6, 3, 3))
+    V = np.empty((12, 3))
+    q4 = np.empty(4)
+    T = np.empty((3, 12))
+    dp = np.empty(12)
+    fe = np.empty(12)
+    Ke = np.empty((12, 12))
+    Rg1, Rg2, Rr, qv, Rbar = M[0], M[1], M[2], M[3], M[4]
+    x1, x2, th1, th2, X, dX, ddX, wp, wt = V[0], V[1], V[2], V[3], V[4], V[5], V[6], V[7], V[8]
+    nvec, tvec, dc = V[9], V[10], V[11]
+    reactions[:, :] = 0.0
+    ft_t[:, :] = 0.0
+    ne = conn.shape[0]
+    for c in range(centres.shape[0]):
+        axis = axes[c]
+        reach = radii[c] + r_beam
+        for e in range(ne):
+            a, b = conn[e, 0], conn[e, 1]
+            for i in range(3):
+                x1[i] = X0[a, i] + u[a, i]
+                x2[i] = X0[b, i] + u[b, i]
+            status[e] = FAR
+            if _segment_distance(x1, x2, centres[c], axis, wp, wt) > reach + 0.5 * _norm_diff(x1, x2):
+                continue
+            quat_to_matrix(quat[a], Rg1)
+            quat_to_matrix(quat[b], Rg2)
+            ln = corotated_frame(x1, x2, Rg1, Rg2, R0[e], Rr, qv)
+            local_rotation(Rr, Rg1, R0[e], Rbar, th1, q4)
+            local_rotation(Rr, Rg2, R0[e], Rbar, th2, q4)
+            xis[e], status[e] = closest_point(x1, Rr, ln, th1, th2, centres[c], axis, X, dX, ddX, wp, wt)
+        for e in range(ne):
+            if not _counted(status, e, ne):
+                continue
+            a, b = conn[e, 0], conn[e, 1]
+            for i in range(3):
+                x1[i] = X0[a, i] + u[a, i]
+                x2[i] = X0[b, i] + u[b, i]
+            quat_to_matrix(quat[a], Rg1)
+            quat_to_matrix(quat[b], Rg2)
+            ln = corotated_frame(x1, x2, Rg1, Rg2, R0[e], Rr, qv)
+            local_rotation(Rr, Rg1, R0[e], Rbar, th1, q4)
+            local_rotation(Rr, Rg2, R0[e], Rbar, th2, q4)
+            centreline(xis[e], x1, Rr, ln, th1, th2, X, dX, ddX)
+            for i in range(3):
+                wp[i] = X[i] - centres[c, i]
+            _perp(wp, axis, wp)
+            d = np.sqrt(wp[0] ** 2 + wp[1] ** 2 + wp[2] ** 2)
+            gap = d - reach
+            if gap >= ACTIVE_GAP * reach:
+                continue
+            for i in range(3):
+                nvec[i] = wp[i] / d
+            tvec[0] = axis[1] * nvec[2] - axis[2] * nvec[1]
+            tvec[1] = axis[2] * nvec[0] - axis[0] * nvec[2]
+            tvec[2] = axis[0] * nvec[1] - axis[1] * nvec[0]
+            transfer_matrix(xis[e], Rr, ln, T)
+            p = -k_n * gap if gap < 0.0 else 0.0
+            f_t, dft_dgt, dft_dgn = 0.0, 0.0, 0.0
+            if mu > 0.0:
+                _increment(u, u_c, quat, quat_c, a, b, dp, q4, wt)
+                for i in range(3):
+                    dc[i] = centres[c, i] - centres_c[c, i]
+                f_t, dft_dgt, dft_dgn = _friction(T, dp, dc, tvec, ft_c[c, e], p, mu, k_n, k_t)
+                ft_t[c, e] = f_t
+            # force on the beam: p n - f_t t ; residual gets its negative
+            for j in range(12):
+                acc = 0.0
+                for i in range(3):
+                    acc += T[i, j] * (-p * nvec[i] + f_t * tvec[i])
+                fe[j] = acc
+            for i in range(3):
+                reactions[c, i] += -p * nvec[i] + f_t * tvec[i]
+            if want_tangent:
+                _contact_tangent(T, nvec, tvec, axis, k_n, p, d, dft_dgt, dft_dgn, Ke, M[5])
+            scatter_element(a, b, fe, Ke, want_tangent, f, band, bw)
+
+
+@njit(cache=True)
+def _friction(T, dp, dc, tvec, ft_old, p, mu, k_n, k_t):
+    """Return mapping of the tangential force; (f_t, df_t/dg_t, df_t/dg_n)."""
+    slip = 0.0
+    for i in range(3):
+        acc = 0.0
+        for j in range(12):
+            acc += T[i, j] * dp[j]
+        slip += tvec[i] * (acc - dc[i])
+    trial = ft_old + k_t * slip
+    limit = mu * p
+    if abs(trial) <= limit:
+        return trial, k_t, 0.0
+    sign = 1.0 if trial > 0.0 else -1.0
+    return sign * limit, 0.0, -sign * mu * k_n
+
+
+@njit(cache=True)
+def _contact_tangent(T, n, t, axis, k_n, p, d, dft_dgt, dft_dgn, Ke, C):
+    """Ke = T^T C T with C = k_n n n^T - (p/d)(P - n n^T) + t (dft_dgt t + dft_dgn n)^T."""
+    for i in range(3):
+        for j in range(3):
+            proj = (1.0 if i == j else 0.0) - axis[i] * axis[j] - n[i] * n[j]
+            C[i, j] = (k_n * n[i] * n[j] - p / d * proj
+                       + t[i] * (dft_dgt * t[j] + dft_dgn * n[j]))
+    for a in range(12):
+        for b in range(12):
+            acc = 0.0
+            for i in range(3):
+                for j in range(3):
+                    acc += T[i, a] * C[i, j] * T[j, b]
+            Ke[a, b] = acc
+
+
+@njit(cache=True)
+def _counted(status, e, ne):
+    """Whether the closest point found on element e is counted (once per location)."""
+    s = status[e]
+    if s == INTERIOR:
+        return True
+    if s == AT_START:  # a kink at the start node, or the free start of the beam
+        return e == 0 or status[e - 1] == AT_END
+    if s == AT_END:
+        return e == ne - 1
+    return False
+
+
+@njit(cache=True)
+def _norm_diff(a, b):
+    return np.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
+
+
+@njit(cache=True)
+def _segment_distance(x1, x2, centre, axis, w1, w2):
+    """Distance of the chord x1-x2 from the cylinder axis (a cheap pre-selection)."""
+    for i in range(3):
+        w1[i] = x1[i] - centre[i]
+        w2[i] = x2[i] - x1[i]
+    _perp(w1, axis, w1)
+    _perp(w2, axis, w2)
+    den = w2[0] ** 2 + w2[1] ** 2 + w2[2] ** 2
+    s = 0.0
+    if den > 0.0:
+        s = -(w1[0] * w2[0] + w1[1] * w2[1] + w1[2] * w2[2]) / den
+        s = min(max(s, 0.0), 1.0)
+    return np.sqrt((w1[0] + s * w2[0]) ** 2 + (w1[1] + s * w2[1]) ** 2 + (w1[2] + s * w2[2]) ** 2)

@@ -1,0 +1,172 @@
+"""Implicit static path following: Newton-Raphson with line search and adaptive steps.
+
+The solver knows nothing of beams or contact.  It drives a *problem* object that
+owns the state and the physics and provides:
+
+``bandwidth``                half bandwidth of the tangent (LAPACK band storage)
+``set_load(lam)``            impose the loading (prescribed motions, loads) at factor lam;
+                             prescribed displacements are best applied through the first
+                             correction (``r += K du_p``, then ``update`` adds ``du_p``),
+                             the linear predictor that avoids a kinked first iterate
+``evaluate(want_tangent)``   ``(r, ref, band)``: residual (internal minus external force)
+                             with constrained rows zeroed, a force scale ``ref`` for the
+                             convergence test and the tangent in band storage
+                             (``band[bw + i - j, j] = K[i, j]``, identity on constrained dofs)
+``update(du)``               add a correction to the free unknowns
+``commit()`` / ``revert()``  accept the current state / return to the last accepted one
+``describe(lam)``            the loading at lam in words, for error messages
+
+Convergence needs both the force norm ``|r| <= tol_force * ref`` and the energy norm
+``|du . r| <= tol_energy * (du_1 . r_0)`` (Bathe 2014, sec. 8.4).  The line search
+is the secant search on ``s(eta) = du . r(u + eta du)`` of Crisfield (1991, sec. 9.3).
+Between the requested output points (``stops``) the step is halved on failure and
+doubled again after quick convergence.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+from scipy.linalg import solve_banded
+
+
+class ConvergenceError(RuntimeError):
+    """Raised when an increment cannot be completed even with the smallest step."""
+
+    def __init__(self, increment: int, target: str, residuals, last_converged: str):
+        self.increment = increment
+        self.residuals = list(residuals)
+        self.last_converged = last_converged
+        hist = ", ".join(f"{x:.3e}" for x in self.residuals) or "none"
+        super().__init__(
+            f"Newton-Raphson did not converge at increment {increment} (towards {target}); "
+            f"relative residual history of the last attempt: [{hist}]; "
+            f"last converged state: {last_converged}")
+
+
+class _NotConverged(Exception):
+    def __init__(self, residuals):
+        super().__init__()
+        self.residuals = residuals
+
+
+@dataclass(frozen=True)
+class NewtonSettings:
+    tol_force: float = 1.0e-6      # |r| / ref
+    tol_energy: float = 1.0e-12    # |du . r| / (first iteration's)
+    max_iter: int = 25
+    line_search: bool = True
+    ls_ratio: float = 0.8          # search when |s(1)| > ls_ratio |s(0)|
+    ls_max: int = 4
+    quick: int = 4                 # iterations counted as quick convergence (step grows)
+    min_fraction: float = 1.0 / 256  # smallest step, as a fraction of the stop spacing
+
+
+@njit(cache=True)
+def constrain_band(band, r, fixed, bw):
+    """Zero the rows and columns of the ``fixed`` dofs (unit diagonal) and their residuals."""
+    n = r.shape[0]
+    for i in fixed:
+        for j in range(max(0, i - bw), min(n, i + bw + 1)):
+            band[bw + i - j, j] = 0.0
+            band[bw + j - i, i] = 0.0
+        band[bw, i] = 1.0
+        r[i] = 0.0
+
+
+@njit(cache=True)
+def band_matvec(band, x, bw, out):
+    """out += K x for K in band storage."""
+    n = x.shape[0]
+    for j in range(n):
+        if x[j] != 0.0:
+            for i in range(max(0, j - bw), min(n, j + bw + 1)):
+                out[i] += band[bw + i - j, j] * x[j]
+
+
+def newton(problem, lam: float, s: NewtonSettings) -> int:
+    """Equilibrium at load factor ``lam`` from the last committed state; returns iterations."""
+    problem.revert()
+    problem.set_load(lam)
+    bw = problem.bandwidth
+    r, ref, band = problem.evaluate(True)
+    history = [np.linalg.norm(r) / ref]
+    if history[0] <= s.tol_force:
+        return 0
+    e0 = None
+    for it in range(1, s.max_iter + 1):
+        try:
+            du = solve_banded((bw, bw), band, -r, overwrite_ab=True, check_finite=False)
+        except np.linalg.LinAlgError:  # singular tangent: lost support or collapse
+            raise _NotConverged(history) from None
+        s0 = du @ r
+        problem.update(du)
+        r_new, ref, band = problem.evaluate(True)
+        eta = 1.0
+        if s.line_search and abs(du @ r_new) > s.ls_ratio * abs(s0):
+            eta = _line_search(problem, du, s0, du @ r_new, s)
+            r_new, ref, band = problem.evaluate(True)
+        energy = abs(eta * s0)
+        e0 = energy if e0 is None else e0
+        r = r_new
+        rel = np.linalg.norm(r) / ref
+        history.append(rel)
+        if not np.isfinite(rel) or rel > 1.0e8:
+            raise _NotConverged(history)
+        if rel <= s.tol_force and energy <= s.tol_energy * max(e0, 1e-300):
+            return it
+    raise _NotConverged(history)
+
+
+def _line_search(problem, du, s0, s1, s: NewtonSettings) -> float:
+    """Secant search for a root of s(eta) = du . r(u + eta du) in [0.1, 1]; state ends at eta."""
+    eta_prev, s_prev = 0.0, s0
+    eta, s_eta = 1.0, s1
+    for _ in range(s.ls_max):
+        if abs(s_eta) <= s.ls_ratio * abs(s0) or s_eta == s_prev:
+            break
+        eta_new = eta - s_eta * (eta - eta_prev) / (s_eta - s_prev)
+        eta_new = min(max(eta_new, 0.1), 1.0)
+        if abs(eta_new - eta) < 1e-3:
+            break
+        problem.update((eta_new - eta) * du)
+        eta_prev, s_prev = eta, s_eta
+        eta = eta_new
+        r, _, _ = problem.evaluate(False)
+        s_eta = du @ r
+    return eta
+
+
+def follow_path(problem, stops, settings: NewtonSettings = NewtonSettings(), on_stop=None) -> int:
+    """Go from load factor 0 through every value of ``stops`` (increasing, in (0, 1]).
+
+    ``on_stop(lam)`` is called after each stop is reached and committed.  Returns the
+    number of increments used; raises :class:`ConvergenceError` when the step would
+    fall below ``min_fraction`` of the stop spacing.
+    """
+    stops = np.asarray(stops, dtype=float)
+    spacing = float(np.min(np.diff(np.concatenate(([0.0], stops)))))
+    step = spacing
+    lam = 0.0
+    increment = 0
+    for target in stops:
+        while lam < target - 1e-12 * spacing:
+            trial = min(lam + step, target)
+            increment += 1
+            try:
+                iterations = newton(problem, trial, settings)
+            except _NotConverged as exc:
+                problem.revert()
+                step = 0.5 * (trial - lam)
+                if step < settings.min_fraction * spacing:
+                    raise ConvergenceError(increment, problem.describe(trial), exc.residuals,
+                                           problem.describe(lam)) from None
+                continue
+            problem.commit()
+            if iterations <= settings.quick:
+                step = min(2.0 * step, spacing)
+            lam = trial
+        if on_stop is not None:
+            on_stop(lam)
+    return increment
