@@ -479,3 +479,53 @@ def assemble_beams(X, conn, R0, u, quat, xi_g, w_g, y, z, area, GJ, E, sigma_y, 
                          E, sigma_y, K, n, elastic, eps_p_c[e], alpha_c[e], eps_p_t[e], alpha_t[e],
                          want_tangent, fe, Ke, M33, V3, v4, fl, Kl, fa, Ka, s, D, B, Gt, Bg, t12)
         scatter_element(a, b, fe, Ke, want_tangent, f, band, bw)
+
+
+@njit(cache=True)
+def element_mass_lumped(l0, rho, A, Ip, Iy, Iz, out):
+    """Lumped mass diagonal (12): half the translational mass and half the rotary
+    inertia of the slice, rho l0/2 (A, A, A, Ip, Iy, Iz), at each node."""
+    h = 0.5 * rho * l0
+    for node in range(2):
+        o = 6 * node
+        out[o] = out[o + 1] = out[o + 2] = h * A
+        out[o + 3] = h * Ip
+        out[o + 4] = h * Iy
+        out[o + 5] = h * Iz
+
+
+@njit(cache=True)
+def element_mass_consistent(l0, rho, A, Ip, Rr, out, Ml):
+    """Consistent mass (12x12) in global axes, M = E M_l E^T with E = diag(Rr x 4).
+
+    M_l: linear axial/torsion shape functions and cubic Hermite bending functions of
+    the local Bernoulli element (Przemieniecki 1968, ch. 11); rotary inertia of bending
+    neglected.  ``Ml`` is a 12x12 work array.
+    """
+    Ml[:, :] = 0.0
+    m = rho * A * l0
+    for i, j, v in ((0, 0, 2.0), (0, 6, 1.0), (6, 6, 2.0)):   # axial
+        Ml[i, j] = Ml[j, i] = m * v / 6.0
+    for i, j, v in ((3, 3, 2.0), (3, 9, 1.0), (9, 9, 2.0)):   # torsion
+        Ml[i, j] = Ml[j, i] = rho * Ip * l0 * v / 6.0
+    L = l0
+    # bending in x-y (v, theta_z) and x-z (w, theta_y = -w')
+    for t, r, sg in ((1, 5, 1.0), (2, 4, -1.0)):
+        a = m / 420.0
+        ids = (t, r, t + 6, r + 6)
+        vals = ((156.0, 22.0 * L * sg, 54.0, -13.0 * L * sg),
+                (22.0 * L * sg, 4.0 * L * L, 13.0 * L * sg, -3.0 * L * L),
+                (54.0, 13.0 * L * sg, 156.0, -22.0 * L * sg),
+                (-13.0 * L * sg, -3.0 * L * L, -22.0 * L * sg, 4.0 * L * L))
+        for p in range(4):
+            for q in range(4):
+                Ml[ids[p], ids[q]] = a * vals[p][q]
+    for bi in range(4):
+        for bj in range(4):
+            for i in range(3):
+                for j in range(3):
+                    acc = 0.0
+                    for k in range(3):
+                        for l in range(3):
+                            acc += Rr[i, k] * Ml[3 * bi + k, 3 * bj + l] * Rr[j, l]
+                    out[3 * bi + i, 3 * bj + j] = acc

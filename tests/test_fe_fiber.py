@@ -1,0 +1,75 @@
+"""Fibre section quadrature and the eq. 2 J2 fibre law."""
+import numpy as np
+import pytest
+
+import harnesspipe  # noqa: F401
+from harnesspipe.fe.fiber import disc_fibres, fibre_update, section_response
+from harnesspipe.fe.hardening import flow_stress
+
+
+@pytest.mark.parametrize("n_rings,n_sectors", [(2, 3), (4, 12), (7, 20)])
+def test_disc_quadrature_is_exact_for_area_and_inertia(n_rings, n_sectors):
+    r = 7.05
+    y, z, A = disc_fibres(r, n_rings, n_sectors)
+    assert A.sum() == pytest.approx(np.pi * r**2, rel=1e-13)
+    assert (A * y**2).sum() == pytest.approx(np.pi * r**4 / 4, rel=1e-13)
+    assert (A * z**2).sum() == pytest.approx(np.pi * r**4 / 4, rel=1e-13)
+    assert abs((A * y).sum()) < 1e-10 and abs((A * y * z).sum()) < 1e-8
+
+
+@pytest.mark.parametrize("n", [0.3, 1.0, 2.0])
+def test_fibre_stress_lies_on_eq2_flow_curve(n):
+    E, sigma_y, K = 1000.0, 5.0, 80.0
+    for eps in (0.02, -0.05):
+        sig, Et, eps_p, alpha = fibre_update(eps, 0.0, 0.0, E, sigma_y, K, n, False)
+        assert abs(sig) == pytest.approx(flow_stress(alpha, sigma_y, K, n), rel=1e-10)
+        assert sig == pytest.approx(E * (eps - eps_p), rel=1e-12)
+        assert np.sign(sig) == np.sign(eps) and alpha == pytest.approx(abs(eps_p))
+
+
+def test_fibre_unloads_elastically_and_reloads_on_the_hardened_curve():
+    E, sigma_y, K, n = 1000.0, 5.0, 80.0, 0.5
+    _, _, ep, al = fibre_update(0.03, 0.0, 0.0, E, sigma_y, K, n, False)
+    sig, Et, ep2, al2 = fibre_update(0.029, ep, al, E, sigma_y, K, n, False)
+    assert Et == E and ep2 == ep and sig == pytest.approx(E * (0.029 - ep))
+
+
+@pytest.mark.parametrize("n", [0.12, 0.83, 1.0, 1.5])
+@pytest.mark.parametrize("eps_p_old", [0.0, 1e-3])
+def test_fibre_tangent_matches_finite_difference(n, eps_p_old):
+    E, sigma_y, K = 1559.0, 8.6, 25.6
+    eps = eps_p_old + sigma_y / E * 3.0
+    h = 1e-9
+    _, Et, _, _ = fibre_update(eps, eps_p_old, eps_p_old, E, sigma_y, K, n, False)
+    sp = fibre_update(eps + h, eps_p_old, eps_p_old, E, sigma_y, K, n, False)[0]
+    sm = fibre_update(eps - h, eps_p_old, eps_p_old, E, sigma_y, K, n, False)[0]
+    assert Et == pytest.approx((sp - sm) / (2 * h), rel=1e-4)
+
+
+def test_section_reaches_the_plastic_moment_of_a_disc():
+    # perfectly plastic fibres at a large curvature: M -> M_p = 4/3 sigma_Y r^3
+    r, sigma_y, E = 7.05, 2.0, 1e4
+    y, z, A = disc_fibres(r, 12, 48)
+    s, D = np.zeros(3), np.zeros((3, 3))
+    nf = y.size
+    kappa = 2000 * sigma_y / (E * r)
+    section_response(0.0, 0.0, kappa, y, z, A, np.zeros(nf), np.zeros(nf), np.zeros(nf),
+                     np.zeros(nf), E, sigma_y, 0.0, 1.0, False, s, D)
+    assert s[2] == pytest.approx(4.0 / 3.0 * sigma_y * r**3, rel=2e-3)
+    assert abs(s[0]) < 1e-9 * sigma_y * r**2
+
+
+def test_section_tangent_matches_finite_difference():
+    r, E, sigma_y, K, n = 7.05, 15.7, 0.6, 1.59, 0.3
+    y, z, A = disc_fibres(r, 4, 12)
+    nf = y.size
+    hist = [np.full(nf, 0.0) for _ in range(4)]
+    e = np.array([1e-3, 0.004, -0.006])
+    s, D = np.zeros(3), np.zeros((3, 3))
+    section_response(*e, y, z, A, *hist, E, sigma_y, K, n, False, s, D)
+    h = 1e-8
+    for j in range(3):
+        sp, sm = np.zeros(3), np.zeros(3)
+        section_response(*(e + h * np.eye(3)[j]), y, z, A, *hist, E, sigma_y, K, n, False, sp, np.zeros((3, 3)))
+        section_response(*(e - h * np.eye(3)[j]), y, z, A, *hist, E, sigma_y, K, n, False, sm, np.zeros((3, 3)))
+        assert np.allclose(D[:, j], (sp - sm) / (2 * h), rtol=1e-5, atol=1e-6 * np.abs(D).max())
