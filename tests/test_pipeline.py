@@ -68,7 +68,7 @@ def test_code_change_reruns_only_its_users(project):
 
 
 def test_one_changed_csv_reruns_only_its_dependants(project):
-    csv = project / "data" / "experimental" / "three_point" / "cwb19_t2_closed_s2.csv"
+    csv = project / "data" / "experimental" / "three_point" / "bend_cwb19_t2_closed_s2.csv"
     lines = csv.read_text().splitlines()
     t, u, f = lines[50].split(",")
     lines[50] = f"{t},{u},{float(f) * 1.01:.6g}"

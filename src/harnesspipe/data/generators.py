@@ -45,24 +45,25 @@ def _three_point_simulator(cfg: dict, case: str):
     mesh = cfg["profiles"]["default"]["rom"]
 
     def simulate(p: dict) -> Curve:
-        result = rom.three_point_run(E=p["E"], sigma_y=p["sigma_y"], K=p["K"], n=p["n"],
-                                     radius=r_o, supports="rollers", span=tp["span"],
-                                     overhang=tp["overhang"], deflection=tp["deflection"], **mesh)
-        markers = marker_rows(result, tp["sample_length"])
-        return Curve(result.deflection, result.force, markers)
+        curve, shapes = rom.three_point(E=p["E"], sigma_y=p["sigma_y"], K=p["K"], n=p["n"],
+                                        radius=r_o, supports="rollers", span=tp["span"],
+                                        overhang=tp["overhang"], deflection=tp["deflection"],
+                                        return_shapes=True, shape_at=MARKER_DEFLECTIONS, **mesh)
+        markers = marker_rows(shapes, tp["sample_length"])
+        return Curve(curve["deflection_mm"].to_numpy(), curve["force_N"].to_numpy(), markers)
     return simulate
 
 
-def marker_rows(result, sample_length: float) -> np.ndarray:
-    """Marker positions (deflection, index, x, y) at the recorded frames.
+def marker_rows(shapes: dict, sample_length: float) -> np.ndarray:
+    """Marker rows (deflection, index, x, y) of the bent shapes.
 
-    Markers sit evenly along the sample; their positions follow the beam's
-    centre line (interpolated by arc length) in the frame nearest each deflection.
+    Markers sit evenly along the sample (5 % to 95 % of its length); each follows
+    the beam's centre line, interpolated by the arc length of the deformed nodes.
     """
     s_marker = np.linspace(0.05, 0.95, MARKERS) * sample_length
     rows = []
     for d in MARKER_DEFLECTIONS:
-        x, y = result.shape_at(d)
+        x, y = shapes[d][:, 0], shapes[d][:, 1]
         s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
         s *= sample_length / s[-1]
         for k, sm in enumerate(s_marker):
