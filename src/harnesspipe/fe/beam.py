@@ -218,11 +218,11 @@ def _b_matrix(Rr, Gt, Bg):
 @njit(cache=True)
 def element_response(X1, X2, R0, x1, x2, q1, q2, xi_g, w_g, y, z, area, GJ,
                      E, sigma_y, K, n, elastic, eps_p_old, alpha_old, eps_p_new, alpha_new,
-                     want_tangent, fg, Kg, M33, V3, v4, fl, Kl, fa, Ka, s, D, B, Gt, Bg, t12):
+                     want_tangent, fg, Kg, M33, V3, v4, fl, Kl, fa, Ka, s, D, B, Gt, Bg, t12, W77):
     """Global internal force ``fg`` (12) and, if ``want_tangent``, tangent ``Kg`` (12x12).
 
-    Work arrays: M33 (10,3,3), V3 (6,3), v4 (4), fl (7), Kl, Ka (7,7), fa (7), s (3),
-    D (3,3), B (3,7), Gt (3,12), Bg (7,12), t12 (4,12).
+    Work arrays: M33 (10,3,3), V3 (6,3), v4 (4), fl (7), Kl, Ka, W77 (7,7), fa (7), s (3),
+    D (3,3), B (3,7), Gt (3,12), Bg (7,12), t12 (11,12).
     """
     Rg1 = M33[0]
     Rg2 = M33[1]
@@ -265,25 +265,36 @@ def element_response(X1, X2, R0, x1, x2, q1, q2, xi_g, w_g, y, z, area, GJ,
         fg[j] = acc
     if not want_tangent:
         return
-    _tangent_a(Kl, T1, T2, th1, th2, fl, Ka, H, wk, V3[2])
+    _tangent_a(Kl, T1, T2, th1, th2, fl, Ka, H, wk, V3[2], W77)
     _tangent_global(Ka, Bg, Rr, qv, Gt, fa, ln, eta, Kg, Sn, Rbar, t12)
 
 
 @njit(cache=True)
-def _tangent_a(Kl, T1, T2, th1, th2, fl, Ka, H, wk, v):
-    """K_a = B_a^T K_l B_a + diag(0, K_h(th1, m1), K_h(th2, m2))."""
-    for i in range(7):
-        for j in range(7):
-            acc = 0.0
-            for a in range(7):
-                ba = _ba(T1, T2, a, i)
-                if ba == 0.0:
-                    continue
-                for b in range(7):
-                    bb = _ba(T1, T2, b, j)
-                    if bb != 0.0:
-                        acc += ba * Kl[a, b] * bb
-            Ka[i, j] = acc
+def _tangent_a(Kl, T1, T2, th1, th2, fl, Ka, H, wk, v, W):
+    """K_a = B_a^T K_l B_a + diag(0, K_h(th1, m1), K_h(th2, m2)), B_a = diag(1, T1, T2).
+
+    ``W`` (7x7) is work; the products use the block structure of B_a.
+    """
+    for i in range(7):  # W = K_l B_a
+        W[i, 0] = Kl[i, 0]
+        for j in range(3):
+            a = 0.0
+            b = 0.0
+            for k in range(3):
+                a += Kl[i, 1 + k] * T1[k, j]
+                b += Kl[i, 4 + k] * T2[k, j]
+            W[i, 1 + j] = a
+            W[i, 4 + j] = b
+    for j in range(7):  # K_a = B_a^T W
+        Ka[0, j] = W[0, j]
+        for i in range(3):
+            a = 0.0
+            b = 0.0
+            for k in range(3):
+                a += T1[k, i] * W[1 + k, j]
+                b += T2[k, i] * W[4 + k, j]
+            Ka[1 + i, j] = a
+            Ka[4 + i, j] = b
     for node in range(2):
         T = T1 if node == 0 else T2
         th = th1 if node == 0 else th2
@@ -296,32 +307,24 @@ def _tangent_a(Kl, T1, T2, th1, th2, fl, Ka, H, wk, v):
 
 
 @njit(cache=True)
-def _ba(T1, T2, a, i):
-    """Entry (a, i) of B_a = diag(1, Ts^-1(th1), Ts^-1(th2))."""
-    if a == 0 or i == 0:
-        return 1.0 if a == i else 0.0
-    if 1 <= a <= 3 and 1 <= i <= 3:
-        return T1[a - 1, i - 1]
-    if 4 <= a and 4 <= i:
-        return T2[a - 4, i - 4]
-    return 0.0
-
-
-@njit(cache=True)
 def _tangent_global(Ka, Bg, Rr, qv, Gt, fa, ln, eta, Kg, Sn, EQ, t12):
     """K_g = B^T K_a B + D N - E Q G^T E^T - E d(G m)/dp  (after Battini & Pacoste 2002).
 
     The last term is the full variation of G at fixed moments (including the eta
     ratios), so the tangent is consistent also for large local rotations.
     """
+    KB = t12[4:11]  # K_a B (7x12)
+    for a in range(7):
+        for j in range(12):
+            acc = 0.0
+            for b in range(7):
+                acc += Ka[a, b] * Bg[b, j]
+            KB[a, j] = acc
     for i in range(12):
         for j in range(12):
             acc = 0.0
             for a in range(7):
-                if Bg[a, i] == 0.0:
-                    continue
-                for b in range(7):
-                    acc += Bg[a, i] * Ka[a, b] * Bg[b, j]
+                acc += Bg[a, i] * KB[a, j]
             Kg[i, j] = acc
     # D N: D3 = (I - r1 r1^T)/l_n on the translational blocks
     N = fa[0]
@@ -464,7 +467,8 @@ def assemble_beams(X, conn, R0, u, quat, xi_g, w_g, y, z, area, GJ, E, sigma_y, 
     B = np.empty((3, 7))
     Gt = np.empty((3, 12))
     Bg = np.empty((7, 12))
-    t12 = np.empty((4, 12))
+    t12 = np.empty((11, 12))
+    W77 = np.empty((7, 7))
     fe = np.empty(12)
     Ke = np.zeros((12, 12))
     x1 = V3[4]
@@ -477,7 +481,7 @@ def assemble_beams(X, conn, R0, u, quat, xi_g, w_g, y, z, area, GJ, E, sigma_y, 
             x2[i] = X[b, i] + u[b, i]
         element_response(X[a], X[b], R0[e], x1, x2, quat[a], quat[b], xi_g, w_g, y, z, area, GJ,
                          E, sigma_y, K, n, elastic, eps_p_c[e], alpha_c[e], eps_p_t[e], alpha_t[e],
-                         want_tangent, fe, Ke, M33, V3, v4, fl, Kl, fa, Ka, s, D, B, Gt, Bg, t12)
+                         want_tangent, fe, Ke, M33, V3, v4, fl, Kl, fa, Ka, s, D, B, Gt, Bg, t12, W77)
         scatter_element(a, b, fe, Ke, want_tangent, f, band, bw)
 
 

@@ -16,7 +16,8 @@ Hermite cubic (H1, l H2, H3, l H4) in the nodal translations and spins.  This ``
 (3x12) is exact for rigid motions; the tangent neglects the variation of T and of
 the closest-point parameter (an approximate but robust Newton matrix).
 
-Normal law: ``p = k_n max(-g, 0)``.  Friction (optional, mu > 0): tangential
+Normal law: ``p = k_n max(-g, 0)`` (two-sided near the surface for a loaded cylinder,
+see ACTIVE_GAP).  Friction (optional, mu > 0): tangential
 penalty ``k_t`` in the plane normal to the axis, trial ``f_t = f_t,old + k_t dg_t``
 with ``dg_t`` the tangential slip of the material point since the last converged
 increment, return to ``|f_t| = mu p`` when it slips.  The tangential history is
@@ -32,9 +33,11 @@ from harnesspipe.fe.beam import corotated_frame, local_rotation, scatter_element
 from harnesspipe.fe.rotation import quat_mul, quat_to_matrix, rotvec_from_quat
 
 NEWTON_IT = 20
-# A closest point with a gap below ACTIVE_GAP * (R + r_beam) enters the tangent even
-# when it carries no force: the linearised gap misses the second-order change as the
-# beam slides over a cylinder, and a support dropped for one iterate leaves a mechanism.
+# Active set frozen per increment: a cylinder that carried load at the last converged
+# increment (``bilateral``) acts on its closest points as a two-sided spring while the
+# gap is below ACTIVE_GAP * (R + r_beam).  An iterate that overshoots the surface then
+# keeps its support and Newton stays quadratic; the caller releases a cylinder whose
+# converged reaction turns tensile and repeats the increment.
 ACTIVE_GAP = 1.0e-2
 FAR, INTERIOR, AT_START, AT_END = 0, 1, 2, 3
 
@@ -119,6 +122,7 @@ def closest_point(x1, Rr, ln, th1, th2, centre, axis, X, dX, ddX, dp, tp):
 @njit(cache=True)
 def transfer_matrix(xi, Rr, ln, T):
     """T (3x12): variation of the contact point from the element's nodal variations."""
+    l1, l3 = 1.0 - xi, xi
     h1 = 1.0 - 3.0 * xi * xi + 2.0 * xi ** 3
     h3 = 3.0 * xi * xi - 2.0 * xi ** 3
     h2 = ln * xi * (1.0 - xi) ** 2
@@ -127,8 +131,8 @@ def transfer_matrix(xi, Rr, ln, T):
         for j in range(3):
             rr = Rr[i, 0] * Rr[j, 0]
             pp = (1.0 if i == j else 0.0) - rr
-            T[i, j] = (1.0 - xi) * rr + h1 * pp
-            T[i, 6 + j] = xi * rr + h3 * pp
+            T[i, j] = l1 * rr + h1 * pp
+            T[i, 6 + j] = l3 * rr + h3 * pp
     # w x r1 = -S(r1) w
     r = Rr[:, 0]
     for blk, h in ((3, h2), (9, h4)):
@@ -163,8 +167,8 @@ def _increment(u, u_c, quat, quat_c, a, b, dp, qw, tv):
 
 @njit(cache=True)
 def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axes, radii,
-                     r_beam, k_n, mu, k_t, ft_c, ft_t, want_tangent, f, band, bw,
-                     reactions, status, xis):
+                     bilateral, r_beam, k_n, mu, k_t, ft_c, ft_t, want_tangent, f, band, bw,
+                     reactions, pressures, status, xis):
     """Add the contact residual (and tangent) of all cylinders to ``f`` (and ``band``).
 
     ``f`` is a resistance (internal minus external): contact forces enter with a minus
@@ -173,7 +177,7 @@ def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axe
     ``status``/``xis`` (n_elements) are work arrays.
     """
     M = np.empty((6, 3, 3))
-    V = np.empty((12, 3))
+    V = np.empty((13, 3))
     q4 = np.empty(4)
     T = np.empty((3, 12))
     dp = np.empty(12)
@@ -181,8 +185,9 @@ def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axe
     Ke = np.empty((12, 12))
     Rg1, Rg2, Rr, qv, Rbar = M[0], M[1], M[2], M[3], M[4]
     x1, x2, th1, th2, X, dX, ddX, wp, wt = V[0], V[1], V[2], V[3], V[4], V[5], V[6], V[7], V[8]
-    nvec, tvec, dc = V[9], V[10], V[11]
+    nvec, tvec, dc, fvec = V[9], V[10], V[11], V[12]
     reactions[:, :] = 0.0
+    pressures[:] = 0.0
     ft_t[:, :] = 0.0
     ne = conn.shape[0]
     for c in range(centres.shape[0]):
@@ -220,7 +225,7 @@ def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axe
             _perp(wp, axis, wp)
             d = np.sqrt(wp[0] ** 2 + wp[1] ** 2 + wp[2] ** 2)
             gap = d - reach
-            if gap >= ACTIVE_GAP * reach:
+            if gap > (ACTIVE_GAP * reach if bilateral[c] else 0.0):
                 continue
             for i in range(3):
                 nvec[i] = wp[i] / d
@@ -228,7 +233,7 @@ def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axe
             tvec[1] = axis[2] * nvec[0] - axis[0] * nvec[2]
             tvec[2] = axis[0] * nvec[1] - axis[1] * nvec[0]
             transfer_matrix(xis[e], Rr, ln, T)
-            p = -k_n * gap if gap < 0.0 else 0.0
+            p = -k_n * gap if (gap < 0.0 or bilateral[c]) else 0.0
             f_t, dft_dgt, dft_dgn = 0.0, 0.0, 0.0
             if mu > 0.0:
                 _increment(u, u_c, quat, quat_c, a, b, dp, q4, wt)
@@ -237,13 +242,12 @@ def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axe
                 f_t, dft_dgt, dft_dgn = _friction(T, dp, dc, tvec, ft_c[c, e], p, mu, k_n, k_t)
                 ft_t[c, e] = f_t
             # force on the beam: p n - f_t t ; residual gets its negative
-            for j in range(12):
-                acc = 0.0
-                for i in range(3):
-                    acc += T[i, j] * (-p * nvec[i] + f_t * tvec[i])
-                fe[j] = acc
             for i in range(3):
-                reactions[c, i] += -p * nvec[i] + f_t * tvec[i]
+                fvec[i] = -p * nvec[i] + f_t * tvec[i]
+                reactions[c, i] += fvec[i]
+            pressures[c] += p
+            for j in range(12):
+                fe[j] = T[0, j] * fvec[0] + T[1, j] * fvec[1] + T[2, j] * fvec[2]
             if want_tangent:
                 _contact_tangent(T, nvec, tvec, axis, k_n, p, d, dft_dgt, dft_dgn, Ke, M[5])
             scatter_element(a, b, fe, Ke, want_tangent, f, band, bw)

@@ -15,6 +15,8 @@ owns the state and the physics and provides:
 ``update(du)``               add a correction to the free unknowns
 ``commit()`` / ``revert()``  accept the current state / return to the last accepted one
 ``describe(lam)``            the loading at lam in words, for error messages
+``accept()`` (optional)      after convergence: False if the problem changed an active
+                             set (e.g. released a contact), so the increment is repeated
 
 Convergence needs both the force norm ``|r| <= tol_force * ref`` and the energy norm
 ``|du . r| <= tol_energy * (du_1 . r_0)`` (Bathe 2014, sec. 8.4).  The line search
@@ -61,6 +63,7 @@ class NewtonSettings:
     ls_max: int = 4
     quick: int = 4                 # iterations counted as quick convergence (step grows)
     min_fraction: float = 1.0 / 256  # smallest step, as a fraction of the stop spacing
+    max_set_changes: int = 3       # repeats of an increment after active-set changes
 
 
 @njit(cache=True)
@@ -156,6 +159,10 @@ def follow_path(problem, stops, settings: NewtonSettings = NewtonSettings(), on_
             increment += 1
             try:
                 iterations = newton(problem, trial, settings)
+                for _ in range(settings.max_set_changes):
+                    if getattr(problem, "accept", lambda: True)():
+                        break
+                    iterations = newton(problem, trial, settings)
             except _NotConverged as exc:
                 problem.revert()
                 step = 0.5 * (trial - lam)

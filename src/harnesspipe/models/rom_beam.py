@@ -132,7 +132,9 @@ class BeamSystem:
             self.ft = np.zeros((nc, ne))
             self.ft_trial = np.zeros((nc, ne))
             self.cyl_reactions = np.zeros((nc, 3))
+            self.pressures = np.zeros(nc)
             self.status = np.zeros(ne, dtype=np.int64)
+            self.bilateral = np.zeros(nc, dtype=np.bool_)  # loaded at the last converged state
             self.xis = np.zeros(ne)
             h = length / ne
             self.k_n = PENALTY_FACTOR * 12.0 * self.EI / h**3
@@ -143,10 +145,19 @@ class BeamSystem:
         centres = self.centres.copy() if self.cylinders is not None else None
         return {"u": self.u.copy(), "quat": self.quat.copy(), "lam": self.lam, "centres": centres}
 
+    def accept(self) -> bool:
+        """Check the frozen contact set at a converged state; release tensile cylinders."""
+        if self.cylinders is None:
+            return True
+        tensile = self.bilateral & (self.pressures < 0.0)
+        self.bilateral &= ~tensile
+        return not tensile.any()
+
     def commit(self):
         self.hist[:] = self.hist_trial
         if self.cylinders is not None:
             self.ft[:] = self.ft_trial
+            self.bilateral[:] = self.pressures > 0.0
         self._committed = self._snapshot()
 
     def revert(self):
@@ -181,9 +192,11 @@ class BeamSystem:
             c = self.cylinders
             last = self._committed
             assemble_contact(self.X, self.conn, self.R0, self.u, self.quat, last["u"], last["quat"],
-                             self.centres, last["centres"], c.axes, c.radii, self.radius, self.k_n,
+                             self.centres, last["centres"], c.axes, c.radii, self.bilateral,
+                             self.radius, self.k_n,
                              c.mu, self.k_n, self.ft, self.ft_trial, want_tangent, self.f,
-                             self.band, self.bandwidth, self.cyl_reactions, self.status, self.xis)
+                             self.band, self.bandwidth, self.cyl_reactions, self.pressures,
+                             self.status, self.xis)
             ref = max(ref, np.linalg.norm(self.cyl_reactions))
         r = self.f - self.lam * self.load
         self.reaction_dofs[:] = r[self.fixed]

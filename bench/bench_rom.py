@@ -1,0 +1,184 @@
+"""Benchmark of the ROM three-point model (stand-alone: ``.venv/bin/python bench/bench_rom.py``).
+
+Measures, on one core:
+* the median wall time of a full 30 mm three-point curve with roller supports on the
+  default mesh, after JIT (``--repeat`` runs);
+* the JIT time with an empty Numba cache and when loading from the cache (fresh
+  subprocesses with HARNESSPIPE_NUMBA_CACHE pointing at a temporary folder);
+* optionally OpenSeesPy on the pinned model (co-rotational displacement-based fibre
+  beams, same mesh, Lobatto points and increments, elastic-perfectly plastic fibres):
+  force agreement and speed ratio.
+Appends the figures under "## ROM three-point" in bench/RESULTS.md (replacing that
+section only).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+CLOSED = dict(E=15.7, sigma_y=0.6, K=1.59, n=0.3, radius=7.05)  # Table 3, closed tube
+RESULTS = Path(__file__).resolve().parent / "RESULTS.md"
+HEADING = "## ROM three-point"
+FIRST_CALL = ("import time; t = time.perf_counter(); from harnesspipe import rom; "
+              "rom.three_point(E=15.7, sigma_y=0.6, K=1.59, n=0.3, radius=7.05); "
+              "print(time.perf_counter() - t)")
+
+
+COARSE = dict(n_elements=30, n_increments=15, n_rings=3, n_sectors=10)
+FINE = dict(n_elements=80, n_increments=20, n_rings=8, n_sectors=24)
+
+
+def warm_median(repeat: int, **mesh):
+    """Median wall of a full curve (after one untimed call) and the curve."""
+    from harnesspipe import rom
+    curve = rom.three_point(**CLOSED, **mesh)  # compile or load
+    walls = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        rom.three_point(**CLOSED, **mesh)
+        walls.append(time.perf_counter() - t0)
+    return statistics.median(walls), curve
+
+
+def deviation(curve, reference) -> float:
+    """Largest force difference from the reference curve, relative to its peak."""
+    F = np.interp(reference["deflection_mm"], curve["deflection_mm"], curve["force_N"])
+    return float(np.max(np.abs(F - reference["force_N"])) / reference["force_N"].max())
+
+
+def first_call_seconds(cache: str) -> float:
+    env = {**os.environ, "HARNESSPIPE_NUMBA_CACHE": cache, "NUMBA_NUM_THREADS": "1"}
+    out = subprocess.run([sys.executable, "-c", FIRST_CALL], env=env, check=True,
+                         capture_output=True, text=True)
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+def opensees_pinned(E, sigma_y, radius, span, deflection, n_el, n_inc, n_rings, n_sectors):
+    """Pinned three-point curve with OpenSeesPy; returns (deflections, forces, wall)."""
+    import openseespy.opensees as ops
+    t0 = time.perf_counter()
+    ops.wipe()
+    ops.model("basic", "-ndm", 2, "-ndf", 3)
+    for k in range(n_el + 1):
+        ops.node(k + 1, span * k / n_el, 0.0)
+    ops.fix(1, 1, 1, 0)
+    ops.fix(n_el + 1, 0, 1, 0)
+    ops.uniaxialMaterial("ElasticPP", 1, E, sigma_y / E)
+    ops.section("Fiber", 1)
+    ops.patch("circ", 1, n_sectors, n_rings, 0.0, 0.0, 0.0, radius, 0.0, 360.0)
+    ops.beamIntegration("Lobatto", 1, 1, 3)
+    ops.geomTransf("Corotational", 1)
+    for k in range(n_el):
+        ops.element("dispBeamColumn", k + 1, k + 1, k + 2, 1, 1)
+    mid = n_el // 2 + 1
+    ops.timeSeries("Linear", 1)
+    ops.pattern("Plain", 1, 1)
+    ops.load(mid, 0.0, -1.0, 0.0)
+    ops.system("BandGeneral")
+    ops.numberer("RCM")
+    ops.constraints("Plain")
+    ops.test("NormDispIncr", 1e-10, 50)
+    ops.algorithm("Newton")
+    ops.integrator("DisplacementControl", mid, 2, -deflection / n_inc)
+    ops.analysis("Static")
+    u, F = [0.0], [0.0]
+    for _ in range(n_inc):
+        if ops.analyze(1) != 0:
+            raise RuntimeError("OpenSees did not converge")
+        u.append(-ops.nodeDisp(mid, 2))
+        F.append(ops.getLoadFactor(1))
+    return np.array(u), np.array(F), time.perf_counter() - t0
+
+
+def compare_opensees(repeat: int) -> str:
+    try:
+        import openseespy.opensees  # noqa: F401
+    except (ImportError, RuntimeError) as exc:  # the wheel needs the system libblas.so.3
+        return (f"OpenSeesPy comparison: not run. `pip install openseespy` succeeded "
+                f"({_version('openseespy')}) but the import fails here: {exc!r} (its shared "
+                f"library needs the system `libblas.so.3`, absent on this machine).")
+    from harnesspipe import rom
+    case = dict(E=15.7, sigma_y=0.6, radius=7.05, span=127.0, deflection=30.0)
+    mesh = dict(n_el=40, n_inc=20, n_rings=8, n_sectors=24)
+    ours = dict(n_elements=40, n_increments=20, n_rings=8, n_sectors=24)
+    rom.three_point(**case, K=0.0, n=1.0, supports="pinned", **ours)
+    walls_h, walls_o = [], []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        curve = rom.three_point(**case, K=0.0, n=1.0, supports="pinned", **ours)
+        walls_h.append(time.perf_counter() - t0)
+        u, F, wall = opensees_pinned(**case, **mesh)
+        walls_o.append(wall)
+    F_h = np.interp(u, curve["deflection_mm"], curve["force_N"])
+    dev = np.max(np.abs(F_h[1:] - F[1:]) / np.abs(F[1:]))
+    th, to = statistics.median(walls_h), statistics.median(walls_o)
+    return (f"OpenSeesPy {_version('openseespy')} comparison, pinned supports, elastic-perfectly "
+            f"plastic fibres (E 15.7, sigma_Y 0.6, K 0), 40 co-rotational dispBeamColumn elements, "
+            f"3 Lobatto points, 8 x 24 fibres (OpenSees `patch circ`, harnesspipe polar Gauss), "
+            f"20 displacement-controlled increments to 30 mm:\n"
+            f"- largest force deviation over the curve: {100 * dev:.2f} %\n"
+            f"- median wall: harnesspipe {1e3 * th:.1f} ms, OpenSeesPy {1e3 * to:.1f} ms "
+            f"(ratio OpenSees/harnesspipe {to / th:.2f})")
+
+
+def _version(dist: str) -> str:
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version(dist)
+    except PackageNotFoundError:
+        return "?"
+
+
+def write_section(text: str) -> None:
+    old = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
+    start = old.find(HEADING)
+    if start >= 0:
+        nxt = old.find("\n## ", start + len(HEADING))
+        old = old[:start].rstrip() + ("\n" + old[nxt:] if nxt >= 0 else "")
+    RESULTS.write_text(old.rstrip() + "\n\n" + text.rstrip() + "\n")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=20)
+    ap.add_argument("--no-write", action="store_true")
+    args = ap.parse_args()
+    import numba
+    numba.set_num_threads(1)
+    with tempfile.TemporaryDirectory() as cache:
+        cold = first_call_seconds(cache)
+        cached = first_call_seconds(cache)
+    warm, curve = warm_median(args.repeat)
+    coarse, coarse_curve = warm_median(args.repeat, **COARSE)
+    from harnesspipe import rom
+    reference = rom.three_point(**CLOSED, **FINE)
+    ops = compare_opensees(max(3, args.repeat // 4))
+    text = (f"{HEADING}\n\n"
+            f"`bench/bench_rom.py`, {time.strftime('%Y-%m-%d')}, {platform.processor() or platform.machine()}, "
+            f"Python {platform.python_version()}, numba {numba.__version__}, one thread.\n"
+            f"Case: Table 3 closed tube (E 15.7, sigma_Y 0.6, K 1.59, n 0.3), r_o 7.05, rollers, "
+            f"30 mm, default mesh (40 elements, 20 output increments, 4 x 12 fibres, 3 Lobatto "
+            f"points), {len(curve)} curve rows.\n\n"
+            f"- full curve, warm (median of {args.repeat}): {1e3 * warm:.1f} ms (goal 50 ms); "
+            f"force deviation from an 80-element, 8 x 24-fibre reference: "
+            f"{100 * deviation(curve, reference):.2f} %\n"
+            f"- coarser mesh (30 elements, 15 increments, 3 x 10 fibres): {1e3 * coarse:.1f} ms, "
+            f"deviation {100 * deviation(coarse_curve, reference):.2f} %\n"
+            f"- first call in a fresh process, empty Numba cache (JIT): {cold:.1f} s\n"
+            f"- first call in a fresh process, from the cache: {cached:.2f} s\n\n{ops}\n")
+    print(text)
+    if not args.no_write:
+        write_section(text)
+
+
+if __name__ == "__main__":
+    main()
