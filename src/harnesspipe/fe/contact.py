@@ -166,6 +166,36 @@ def _increment(u, u_c, quat, quat_c, a, b, dp, qw, tv):
 
 
 @njit(cache=True)
+def _element_geometry(X0, u, quat, R0, a, b, x1, x2, M, th1, th2, q4):
+    """Current end points, co-rotated frame (into M[2]) and local rotations; returns l_n."""
+    for i in range(3):
+        x1[i] = X0[a, i] + u[a, i]
+        x2[i] = X0[b, i] + u[b, i]
+    quat_to_matrix(quat[a], M[0])
+    quat_to_matrix(quat[b], M[1])
+    ln = corotated_frame(x1, x2, M[0], M[1], R0, M[2], M[3])
+    local_rotation(M[2], M[0], R0, M[4], th1, q4)
+    local_rotation(M[2], M[1], R0, M[4], th2, q4)
+    return ln
+
+
+@njit(cache=True)
+def _closest_points(X0, conn, R0, u, quat, centre, axis, reach, status, xis, M, V, q4):
+    """Closest point (xis) and its status on every element near one cylinder."""
+    x1, x2, th1, th2, X, dX, ddX, wp, wt = V[0], V[1], V[2], V[3], V[4], V[5], V[6], V[7], V[8]
+    for e in range(conn.shape[0]):
+        a, b = conn[e, 0], conn[e, 1]
+        for i in range(3):
+            x1[i] = X0[a, i] + u[a, i]
+            x2[i] = X0[b, i] + u[b, i]
+        status[e] = FAR
+        if _segment_distance(x1, x2, centre, axis, wp, wt) > reach + 0.5 * _norm_diff(x1, x2):
+            continue
+        ln = _element_geometry(X0, u, quat, R0[e], a, b, x1, x2, M, th1, th2, q4)
+        xis[e], status[e] = closest_point(x1, M[2], ln, th1, th2, centre, axis, X, dX, ddX, wp, wt)
+
+
+@njit(cache=True)
 def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axes, radii,
                      bilateral, r_beam, k_n, mu, k_t, ft_c, ft_t, want_tangent, f, band, bw,
                      reactions, pressures, status, xis):
@@ -183,7 +213,7 @@ def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axe
     dp = np.empty(12)
     fe = np.empty(12)
     Ke = np.empty((12, 12))
-    Rg1, Rg2, Rr, qv, Rbar = M[0], M[1], M[2], M[3], M[4]
+    Rr = M[2]
     x1, x2, th1, th2, X, dX, ddX, wp, wt = V[0], V[1], V[2], V[3], V[4], V[5], V[6], V[7], V[8]
     nvec, tvec, dc, fvec = V[9], V[10], V[11], V[12]
     reactions[:, :] = 0.0
@@ -193,32 +223,12 @@ def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axe
     for c in range(centres.shape[0]):
         axis = axes[c]
         reach = radii[c] + r_beam
-        for e in range(ne):
-            a, b = conn[e, 0], conn[e, 1]
-            for i in range(3):
-                x1[i] = X0[a, i] + u[a, i]
-                x2[i] = X0[b, i] + u[b, i]
-            status[e] = FAR
-            if _segment_distance(x1, x2, centres[c], axis, wp, wt) > reach + 0.5 * _norm_diff(x1, x2):
-                continue
-            quat_to_matrix(quat[a], Rg1)
-            quat_to_matrix(quat[b], Rg2)
-            ln = corotated_frame(x1, x2, Rg1, Rg2, R0[e], Rr, qv)
-            local_rotation(Rr, Rg1, R0[e], Rbar, th1, q4)
-            local_rotation(Rr, Rg2, R0[e], Rbar, th2, q4)
-            xis[e], status[e] = closest_point(x1, Rr, ln, th1, th2, centres[c], axis, X, dX, ddX, wp, wt)
+        _closest_points(X0, conn, R0, u, quat, centres[c], axis, reach, status, xis, M, V, q4)
         for e in range(ne):
             if not _counted(status, e, ne):
                 continue
             a, b = conn[e, 0], conn[e, 1]
-            for i in range(3):
-                x1[i] = X0[a, i] + u[a, i]
-                x2[i] = X0[b, i] + u[b, i]
-            quat_to_matrix(quat[a], Rg1)
-            quat_to_matrix(quat[b], Rg2)
-            ln = corotated_frame(x1, x2, Rg1, Rg2, R0[e], Rr, qv)
-            local_rotation(Rr, Rg1, R0[e], Rbar, th1, q4)
-            local_rotation(Rr, Rg2, R0[e], Rbar, th2, q4)
+            ln = _element_geometry(X0, u, quat, R0[e], a, b, x1, x2, M, th1, th2, q4)
             centreline(xis[e], x1, Rr, ln, th1, th2, X, dX, ddX)
             for i in range(3):
                 wp[i] = X[i] - centres[c, i]

@@ -317,12 +317,14 @@ def cantilever_run(material: Material, radius: float, length: float, tip_load=No
         load[tip] = tip_load
         system = BeamSystem(X, material, radius, mesh, fixed, load=load,
                             describe=lambda lam: f"tip load {lam * tip_load:.6g} N")
-        force = lambda lam: lam * tip_load  # noqa: E731
     else:
         system = BeamSystem(X, material, radius, mesh, fixed + [tip],
                             prescribed={tip: tip_displacement},
                             describe=lambda lam: f"tip deflection {lam * tip_displacement:.6g} mm")
-        force = lambda lam: system.reaction(tip)  # noqa: E731
+
+    def force(lam):
+        return lam * tip_load if tip_load is not None else system.reaction(tip)
+
     rows, shapes = [(0.0, 0.0, 0.0, 0.0)], {}
 
     def record(lam):
