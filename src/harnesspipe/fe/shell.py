@@ -13,9 +13,11 @@ Formulation (total Lagrangian, continuum-based / degenerated solid shell):
   Lambrecht 2002) and the second Piola-Kirchhoff stress S = T : dE_H/dE.
 * Transverse shear: MITC4 assumed natural strains tied at the edge midpoints
   (Dvorkin & Bathe 1984), elastic with kappa_s = 5/6, as in Abaqus shells.
-* Drilling rotation: penalty tying each nodal triad to the element edge
-  (omega = e . s / |e|, energy 1/2 k_d omega^2, k_d = DRILL_FACTOR G h0 A), a
-  rotational "hourglass" control in the sense of the paper's Sec. 3.2.
+* Drilling rotation: penalty tying each nodal triad to the polar rotation of the
+  element centre (a finite-rotation form of Hughes & Brezzi 1989; energy
+  1/2 k_d omega^2, k_d = DRILL_FACTOR G h0 A), the rotational "hourglass"
+  control of the paper's Sec. 3.2; it vanishes for any rigid motion and any
+  homogeneous stretch, so the patch tests hold exactly.
 * Thickness: h = h0 exp(eps_33), eps_33 the element mean of the material's
   through-thickness strain (plastic incompressibility + elastic Poisson), updated
   once per converged step; reference volumes use h0.
@@ -42,7 +44,7 @@ TYING = np.array([[0.0, -1.0], [0.0, 1.0], [-1.0, 0.0], [1.0, 0.0]])
 SHEAR_CORRECTION = 5.0 / 6.0
 DRILL_FACTOR = 1.0e-3
 DOF_PER_NODE = 6
-FD_STEP = 1.0e-6  # relative perturbation for the finite-difference tangent
+FD_STEP = 1.0e-6  # relative perturbation of the central-difference tangent
 
 
 @njit(cache=True)
@@ -99,47 +101,57 @@ def rotation_matrix(theta, R):
 
 
 @njit(cache=True)
-def reference_element(X, D, h0, Jinv, dV, shear_ref, S0, area):
-    """Constant reference data of one element.
+def _local_jacobian(X, D, h0, xi, eta, zeta, N, dN, G, J):
+    """J[k, i] = e_k . G_i in the local frame (e1 along G_xi, e3 along the director);
+    returns e1."""
+    shape(xi, eta, N, dN)
+    G[:, :] = 0.0
+    for a in range(4):
+        for i in range(3):
+            G[i, 0] += dN[a, 0] * (X[a, i] + zeta * 0.5 * h0 * D[a, i])
+            G[i, 1] += dN[a, 1] * (X[a, i] + zeta * 0.5 * h0 * D[a, i])
+            G[i, 2] += N[a] * 0.5 * h0 * D[a, i]
+    e3 = G[:, 2] / np.sqrt(np.sum(G[:, 2] ** 2))
+    e1 = G[:, 0].copy()
+    e1 -= np.dot(e1, e3) * e3
+    e1 /= np.sqrt(np.sum(e1 ** 2))
+    e2 = np.empty(3)
+    _cross(e3, e1, e2)
+    for i in range(3):
+        J[0, i] = e1[0] * G[0, i] + e1[1] * G[1, i] + e1[2] * G[2, i]
+        J[1, i] = e2[0] * G[0, i] + e2[1] * G[1, i] + e2[2] * G[2, i]
+        J[2, i] = e3[0] * G[0, i] + e3[1] * G[1, i] + e3[2] * G[2, i]
+    return e1
 
-    ``X`` (4, 3) nodes, ``D`` (4, 3) nodal directors.  Writes ``Jinv`` (4, 5, 3, 3):
-    inverse of J[k, i] = e_k . G_i in the local frame (e1 along G_xi, e3 along the
-    interpolated director), ``dV`` (4, 5) Gauss weights times reference volume,
-    ``shear_ref`` (4,) G_i . G_zeta at the MITC4 tying points, ``S0`` (4, 3) the
-    third vector D x T of each node's triad (T: unit edge to the next node,
-    orthogonal to D).  Returns the reference area.
+
+@njit(cache=True)
+def reference_element(X, D, h0, Jinv, dV, shear_ref, Jc, T0):
+    """Constant reference data of one element; returns its area.
+
+    ``X`` (4, 3) nodes, ``D`` (4, 3) nodal directors.  Writes ``Jinv`` (4, 5, 3, 3),
+    the inverse local Jacobians at the Gauss points, ``dV`` (4, 5) Gauss weights
+    times reference volume, ``shear_ref`` (4,) G_i . G_zeta at the MITC4 tying
+    points, ``Jc`` (3, 3) the inverse local Jacobian at the centre and ``T0`` (4, 3)
+    the centre's e1 projected normal to each nodal director (drilling reference).
     """
     N = np.empty(4)
     dN = np.empty((4, 2))
     J = np.empty((3, 3))
     G = np.empty((3, 3))
-    e = np.empty((3, 3))
-    area[0] = 0.0
+    area = 0.0
     for g in range(4):
-        shape(XI_GP[g, 0], XI_GP[g, 1], N, dN)
         for z in range(N_THICKNESS):
-            zeta = ZETA[z]
-            G[:, :] = 0.0
-            for a in range(4):
-                for i in range(3):
-                    G[i, 0] += dN[a, 0] * (X[a, i] + zeta * 0.5 * h0 * D[a, i])
-                    G[i, 1] += dN[a, 1] * (X[a, i] + zeta * 0.5 * h0 * D[a, i])
-                    G[i, 2] += N[a] * 0.5 * h0 * D[a, i]
-            e3 = G[:, 2] / np.sqrt(np.sum(G[:, 2] ** 2))
-            e1 = G[:, 0].copy()
-            e1 -= np.dot(e1, e3) * e3
-            e1 /= np.sqrt(np.sum(e1 ** 2))
-            e2 = np.empty(3)
-            _cross(e3, e1, e2)
-            e[0], e[1], e[2] = e1, e2, e3
-            for k in range(3):
-                for i in range(3):
-                    J[k, i] = e[k, 0] * G[0, i] + e[k, 1] * G[1, i] + e[k, 2] * G[2, i]
+            _local_jacobian(X, D, h0, XI_GP[g, 0], XI_GP[g, 1], ZETA[z], N, dN, G, J)
             detJ = np.linalg.det(J)
             Jinv[g, z] = np.linalg.inv(J)
             dV[g, z] = detJ * ZETA_W[z]
             if z == N_THICKNESS // 2:
-                area[0] += detJ / (0.5 * h0)
+                area += detJ / (0.5 * h0)
+    e1 = _local_jacobian(X, D, h0, 0.0, 0.0, 0.0, N, dN, G, J)
+    Jc[:, :] = np.linalg.inv(J)
+    for a in range(4):
+        T = e1 - np.dot(e1, D[a]) * D[a]
+        T0[a] = T / np.sqrt(np.sum(T ** 2))
     for p in range(4):
         shape(TYING[p, 0], TYING[p, 1], N, dN)
         col = 0 if p < 2 else 1
@@ -149,14 +161,7 @@ def reference_element(X, D, h0, Jinv, dV, shear_ref, S0, area):
             gi += dN[a, col] * X[a]
             gz += N[a] * 0.5 * h0 * D[a]
         shear_ref[p] = np.dot(gi, gz)
-    for a in range(4):
-        edge = X[(a + 1) % 4] - X[a]
-        T = edge - np.dot(edge, D[a]) * D[a]
-        T /= np.sqrt(np.sum(T ** 2))
-        s = np.empty(3)
-        _cross(D[a], T, s)
-        S0[a] = s
-    return area[0]
+    return area
 
 
 @njit(cache=True)
@@ -206,11 +211,11 @@ def work_arrays():
 
 
 @njit(cache=True)
-def element_force(x, d, s, Jinv, dV, shear_ref, area, h0, h, mat, state_old, state_new, fe, work):
+def element_force(x, d, s, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_old, state_new, fe, work):
     """Internal force ``fe`` (4, 6) (forces, moments) of one element.
 
     ``x`` (4, 3) current nodes, ``d`` (4, 3) current directors, ``s`` (4, 3) current
-    third triad vectors, reference data from :func:`reference_element`,
+    drilling reference vectors Q_a T0_a, reference data from :func:`reference_element`,
     ``mat`` = (E, nu, sigma_y, K, n), history (4 * 5, STATE_SIZE), ``work`` from
     :func:`work_arrays`.
     """
@@ -280,7 +285,6 @@ def element_force(x, d, s, Jinv, dV, shear_ref, area, h0, h, mat, state_old, sta
                        a_eta * 0.5 * (1.0 - xi), a_eta * 0.5 * (1.0 + xi))
             for p in range(4):
                 _shear_variation(p, weights[p] * tau, x, d, gi_t[p], gz_t[p], h0, fe, N, dN, tmp)
-    _drilling(x, s, DRILL_FACTOR * G * h0 * area, fe, tmp)
 
 
 @njit(cache=True)
@@ -297,28 +301,77 @@ def _shear_variation(p, coef, x, d, gi, gz, h0, fe, N, dN, tmp):
 
 
 @njit(cache=True)
-def _drilling(x, s, k_d, fe, tmp):
-    """Drilling penalty: omega_a = e . s_a / |e|, e the edge from node a to the next."""
+def _drill_strains(x, d, r, Jc, omega, f0, f1, t, w43):
+    """omega_a = (r_a x p) . d_a: the angle between the nodal triad vector r_a and p,
+    the element's reference direction e1 turned by the polar rotation of the
+    in-plane deformation gradient at the element centre."""
+    f0[:] = 0.0
+    f1[:] = 0.0
     for a in range(4):
-        b = (a + 1) % 4
-        e = x[b] - x[a]
-        L = np.sqrt(np.sum(e ** 2))
-        omega = np.dot(e, s[a]) / L
-        c = k_d * omega
         for i in range(3):
-            de = s[a, i] / L - omega * e[i] / (L * L)
-            fe[b, i] += c * de
-            fe[a, i] -= c * de
-        _cross(s[a], e, tmp)
-        for i in range(3):
-            fe[a, 3 + i] += c * tmp[i] / L
+            dxi = 0.25 * XI_NODE[a, 0] * x[a, i]
+            deta = 0.25 * XI_NODE[a, 1] * x[a, i]
+            f0[i] += dxi * Jc[0, 0] + deta * Jc[1, 0]
+            f1[i] += dxi * Jc[0, 1] + deta * Jc[1, 1]
+    normal, p, rp = w43[0], w43[1], w43[2]
+    normal[:] = d[0] + d[1] + d[2] + d[3]
+    c1_len = np.sqrt(np.sum(f0 ** 2))
+    _cross(normal, f0, t)                       # in-plane, normal to c1 = f0/|f0|
+    t -= np.dot(t, f0) / (c1_len * c1_len) * f0
+    t /= np.sqrt(np.sum(t ** 2))
+    alpha = np.arctan2(-np.dot(f0, f1) / c1_len, c1_len + np.dot(t, f1))
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    for i in range(3):
+        p[i] = ca * f0[i] / c1_len + sa * t[i]
+    for a in range(4):
+        _cross(r[a], p, rp)
+        omega[a] = np.dot(rp, d[a])
 
 
 @njit(cache=True)
-def element_tangent(x, d, s, Jinv, dV, shear_ref, area, h0, h, mat, state_old, scratch,
+def drilling(x, d, r, Jc, k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, rp, w3a, w3b, w3c, w43):
+    """Drilling penalty 1/2 k_d sum omega_a^2: adds its force to ``fe`` (4, 6) and its
+    Gauss-Newton tangent k_d grad^T grad to ``ke`` (24, 24); grad = d omega/dq by
+    central differences (the neglected omega d2(omega) term vanishes with omega)."""
+    scale = 0.0
+    for a in range(4):
+        for i in range(3):
+            scale = max(scale, abs(x[a, i] - x[0, i]))
+    hu = FD_STEP * scale
+    axis = np.zeros(3)
+    _drill_strains(x, d, r, Jc, omega, w3a, w3b, w3c, w43)
+    for j in range(24):
+        a, c = j // 6, j % 6
+        for sign in (1.0, -1.0):
+            xp[:, :] = x
+            dp[:, :] = d
+            rp[:, :] = r
+            if c < 3:
+                xp[a, c] += sign * hu
+            else:
+                axis[:] = 0.0
+                axis[c - 3] = 1.0
+                rotate(d[a], axis, sign * FD_STEP, dp[a])
+                rotate(r[a], axis, sign * FD_STEP, rp[a])
+            _drill_strains(xp, dp, rp, Jc, om_p if sign > 0 else om_m, w3a, w3b, w3c, w43)
+        step = 2.0 * (hu if c < 3 else FD_STEP)
+        for b in range(4):
+            grad[b, j] = (om_p[b] - om_m[b]) / step
+    for j in range(24):
+        for b in range(4):
+            fe[j // 6, j % 6] += k_d * omega[b] * grad[b, j]
+        for i in range(24):
+            for b in range(4):
+                ke[i, j] += k_d * grad[b, i] * grad[b, j]
+
+
+@njit(cache=True)
+def element_tangent(x, d, s, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_old, scratch,
                     active, ke, fp, fm, xp, dp, sp_, axis, work):
     """Central-difference tangent ``ke`` (24, 24) of :func:`element_force`; columns of
-    inactive DOFs (``active[j] == False``, held fixed) are left zero."""
+    inactive DOFs (``active[j] == False``, held fixed) are left zero.  Central, not
+    forward, differences: the O(h) error of the latter spoils Newton on thin shells,
+    whose bending stiffness is orders of magnitude below the membrane one."""
     scale = 0.0
     for a in range(4):
         for i in range(3):
@@ -340,9 +393,8 @@ def element_tangent(x, d, s, Jinv, dV, shear_ref, area, h0, h, mat, state_old, s
                 axis[c - 3] = 1.0
                 rotate(d[a], axis, sign * FD_STEP, dp[a])
                 rotate(s[a], axis, sign * FD_STEP, sp_[a])
-            out = fp if sign > 0 else fm
-            element_force(xp, dp, sp_, Jinv, dV, shear_ref, area, h0, h, mat, state_old, scratch, out,
-                          work)
+            element_force(xp, dp, sp_, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_old,
+                          scratch, fp if sign > 0 else fm, work)
         step = 2.0 * (hu if c < 3 else FD_STEP)
         for b in range(4):
             for i in range(6):
@@ -350,45 +402,56 @@ def element_tangent(x, d, s, Jinv, dV, shear_ref, area, h0, h, mat, state_old, s
 
 
 @njit(cache=True)
-def assemble(conn, x, Q, D, S0, Jinv, dV, shear_ref, area, h0, h, mat, state_old, state_new,
+def _buffers():
+    """Scratch of :func:`_element_contributions`, allocated once per assembly."""
+    return (np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 6)),
+            np.empty((24, 24)), np.empty((4, 6)), np.empty((4, 6)), np.empty((4, 3)),
+            np.empty((4, 3)),
+            np.empty((4, 3)), np.empty(3), np.empty(24, dtype=np.bool_), np.empty((4, 24)),
+            np.empty(4), np.empty(4), np.empty(4), np.empty(3), np.empty(3), np.empty(3),
+            np.empty((4, 3)), np.empty((4 * N_THICKNESS, STATE_SIZE)), work_arrays())
+
+
+@njit(cache=True)
+def _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat,
+                           state_old, state_new, active, buf):
+    """Force (buf[3]) and tangent (buf[4]) of element ``e`` incl. the drilling penalty."""
+    (xe, de, se, fe, ke, fp, fm, xp, dp, sp_, axis, act, grad, omega, om_p, om_m,
+     w3a, w3b, w3c, w43, scratch, work) = buf
+    for a in range(4):
+        node = conn[e, a]
+        for i in range(3):
+            xe[a, i] = x[node, i]
+            de[a, i] = Q[node, i, 0] * D[node, 0] + Q[node, i, 1] * D[node, 1] + Q[node, i, 2] * D[node, 2]
+            se[a, i] = (Q[node, i, 0] * T0[e, a, 0] + Q[node, i, 1] * T0[e, a, 1]
+                        + Q[node, i, 2] * T0[e, a, 2])
+        for i in range(6):
+            act[6 * a + i] = active[6 * node + i]
+    element_force(xe, de, se, Jinv[e], dV[e], shear_ref[e], Jc[e], area[e], h0, h[e], mat,
+                  state_old[e], state_new[e], fe, work)
+    element_tangent(xe, de, se, Jinv[e], dV[e], shear_ref[e], Jc[e], area[e], h0, h[e], mat,
+                    state_old[e], scratch, act, ke, fp, fm, xp, dp, sp_, axis, work)
+    k_d = DRILL_FACTOR * mat[0] / (2.0 * (1.0 + mat[1])) * h0 * area[e]
+    drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_,
+             w3a, w3b, w3c, w43)
+
+
+@njit(cache=True)
+def assemble(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_old, state_new,
              active, f, kdata):
     """Internal force ``f`` and element tangents ``kdata`` (n_el, 576) in the order of
     :func:`tangent_pattern`.  ``x`` (n_nodes, 3) current nodes, ``Q`` (n_nodes, 3, 3)
-    nodal rotations, ``D`` (n_nodes, 3) reference directors, ``S0`` (n_el, 4, 3),
+    nodal rotations, ``D`` (n_nodes, 3) reference directors, ``T0`` (n_el, 4, 3),
     reference data per element, ``active`` (6 n_nodes,) DOFs that may move."""
+    buf = _buffers()
+    fe, ke = buf[3], buf[4]
     f[:] = 0.0
-    xe = np.empty((4, 3))
-    de = np.empty((4, 3))
-    se = np.empty((4, 3))
-    fe = np.empty((4, 6))
-    ke = np.empty((24, 24))
-    fp = np.empty((4, 6))
-    fm = np.empty((4, 6))
-    xp = np.empty((4, 3))
-    dp = np.empty((4, 3))
-    sp_ = np.empty((4, 3))
-    axis = np.empty(3)
-    act = np.empty(24, dtype=np.bool_)
-    scratch = np.empty((4 * N_THICKNESS, STATE_SIZE))
-    work = work_arrays()
     for e in range(conn.shape[0]):
+        _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h,
+                               mat, state_old, state_new, active, buf)
         for a in range(4):
-            node = conn[e, a]
-            for i in range(3):
-                xe[a, i] = x[node, i]
-                de[a, i] = Q[node, i, 0] * D[node, 0] + Q[node, i, 1] * D[node, 1] + Q[node, i, 2] * D[node, 2]
-                se[a, i] = (Q[node, i, 0] * S0[e, a, 0] + Q[node, i, 1] * S0[e, a, 1]
-                            + Q[node, i, 2] * S0[e, a, 2])
             for i in range(6):
-                act[6 * a + i] = active[6 * node + i]
-        element_force(xe, de, se, Jinv[e], dV[e], shear_ref[e], area[e], h0, h[e], mat,
-                      state_old[e], state_new[e], fe, work)
-        element_tangent(xe, de, se, Jinv[e], dV[e], shear_ref[e], area[e], h0, h[e], mat,
-                        state_old[e], scratch, act, ke, fp, fm, xp, dp, sp_, axis, work)
-        for a in range(4):
-            node = conn[e, a]
-            for i in range(6):
-                f[6 * node + i] += fe[a, i]
+                f[6 * conn[e, a] + i] += fe[a, i]
         for i in range(24):
             for j in range(24):
                 kdata[e, 24 * i + j] = ke[i, j]
@@ -468,12 +531,12 @@ class Shell:
         self.Jinv = np.empty((n_el, 4, N_THICKNESS, 3, 3))
         self.dV = np.empty((n_el, 4, N_THICKNESS))
         self.shear_ref = np.empty((n_el, 4))
-        self.S0 = np.empty((n_el, 4, 3))
+        self.Jc = np.empty((n_el, 3, 3))
+        self.T0 = np.empty((n_el, 4, 3))
         self.area = np.empty(n_el)
-        cell = np.empty(1)
         for e, nodes in enumerate(self.conn):
             self.area[e] = reference_element(self.X[nodes], self.D[nodes], self.h0, self.Jinv[e],
-                                             self.dV[e], self.shear_ref[e], self.S0[e], cell)
+                                             self.dV[e], self.shear_ref[e], self.Jc[e], self.T0[e])
         self.n_dof = DOF_PER_NODE * n_nodes
         self.active = np.ones(self.n_dof, dtype=np.bool_)
         self.contact = contact
@@ -500,8 +563,8 @@ class Shell:
         self.active[np.asarray(dofs, dtype=np.int64)] = False
 
     def tangent_and_force(self):
-        assemble(self.conn, self.x, self.Q, self.D, self.S0, self.Jinv, self.dV, self.shear_ref,
-                 self.area, self.h0, self.h, self.mat, self.state, self._trial, self.active,
+        assemble(self.conn, self.x, self.Q, self.D, self.T0, self.Jinv, self.dV, self.shear_ref,
+                 self.Jc, self.area, self.h0, self.h, self.mat, self.state, self._trial, self.active,
                  self._f, self._kdata)
         K = self._sp.coo_matrix((self._kdata.ravel(), (self._rows, self._cols)),
                                 shape=(self.n_dof, self.n_dof)).tocsr()

@@ -1,0 +1,160 @@
+"""4-node shell and axisymmetric shell against analytic and published results."""
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import harnesspipe  # noqa: F401  (sets the Numba cache)
+from harnesspipe.fe.hardening import flow_stress
+from harnesspipe.fe.shell import DOF_PER_NODE, Shell, lumped_mass
+from harnesspipe.fe.shell_axisym import AxisymShell
+from harnesspipe.fe.shell_static import Controls, solve
+
+BIG = 1e30  # yield stress of an elastic material
+
+
+def grid(xs, ys, surface=lambda x, y: (x, y, 0.0)):
+    """Structured quadrilateral mesh of the parameter grid xs x ys mapped by ``surface``."""
+    X = np.array([surface(x, y) for y in ys for x in xs], dtype=float)
+    nx = len(xs)
+    conn = np.array([[j * nx + i, j * nx + i + 1, (j + 1) * nx + i + 1, (j + 1) * nx + i]
+                     for j in range(len(ys) - 1) for i in range(nx - 1)])
+    return X, conn
+
+
+def dofs(nodes, components):
+    return np.array([DOF_PER_NODE * a + c for a in np.atleast_1d(nodes) for c in components], int)
+
+
+def linear_solution(model, prescribed: dict, loads=None):
+    """Small-displacement solution: one solve with the tangent at the reference state."""
+    K, f = model.tangent_and_force()
+    K = K.toarray()
+    u = np.zeros(model.n_dof)
+    fixed = np.array(sorted(prescribed), int)
+    u[fixed] = [prescribed[k] for k in fixed]
+    free = np.setdiff1d(np.arange(model.n_dof), fixed)
+    rhs = (np.zeros(model.n_dof) if loads is None else loads)[free] - K[np.ix_(free, fixed)] @ u[fixed]
+    u[free] = np.linalg.solve(K[np.ix_(free, free)], rhs)
+    return u
+
+
+def uniaxial_force(stretch, E, nu, sigma_y, K, n, area0):
+    """Closed-form 1D J2 in true stress and log strain, with the section shrinking by
+    elastic Poisson and plastic incompressibility: F = sigma A, A = A0 exp(2 eps_lat)."""
+    eps = np.log(stretch)
+    if E * eps <= sigma_y:
+        eps_p = 0.0
+    else:
+        eps_p = brentq(lambda ep: E * (eps - ep) - flow_stress(ep, sigma_y, K, n), 0.0, eps)
+    tau = E * (eps - eps_p)                       # Kirchhoff stress of the Hencky model
+    eps_lat = -nu * tau / E - 0.5 * eps_p
+    J = np.exp(eps + 2.0 * eps_lat)
+    return tau / J * area0 * np.exp(2.0 * eps_lat), eps_lat
+
+
+@pytest.mark.parametrize("mat", [(1000.0, 0.3, BIG, 0.0, 1.0), (1559.0, 0.42, 8.6, 25.6, 0.12),
+                                 (698.0, 0.42, 8.8, 23.1, 0.83)])
+def test_strip_uniaxial_tension_matches_closed_form(mat):
+    L, W, t, U = 10.0, 2.0, 0.27, 3.0
+    X, conn = grid(np.linspace(0, L, 5), np.linspace(0, W, 3))
+    model = Shell(X, conn, t, *mat)
+    left, right = np.flatnonzero(X[:, 0] == 0), np.flatnonzero(X[:, 0] == L)
+    fixed = np.concatenate([dofs(left, [0]), dofs(left[0], [1]),
+                            dofs(np.arange(len(X)), [2, 3, 4, 5])])
+    model.hold(fixed)
+    out = []
+    hist = solve(model, fixed, dofs(right, [0]), [U] * len(right), controls=Controls(n_steps=12),
+                 on_step=lambda lam: out.append(model.h.mean()))
+    for lam, force, h in zip(hist.lam[1:], hist.reaction[1:], out):
+        exact, eps_lat = uniaxial_force(1 + lam * U / L, *mat, area0=W * t)
+        assert force == pytest.approx(exact, rel=1e-3)
+        assert h == pytest.approx(t * np.exp(eps_lat), rel=1e-3)
+
+
+def test_axisymmetric_tube_tension_matches_closed_form():
+    mat = (1559.0, 0.42, 8.6, 25.6, 0.12)
+    R, t, L, U, ne = 6.2, 0.27, 10.0, 3.0, 8
+    X = np.column_stack([np.full(ne + 1, R), np.linspace(0, L, ne + 1)])
+    conn = np.column_stack([np.arange(ne), np.arange(1, ne + 1)])
+    model = AxisymShell(X, np.zeros(ne + 1), conn, t, *mat)
+    fixed = [1] + [3 * i + 2 for i in range(ne + 1)]
+    hist = solve(model, fixed, [3 * ne + 1], [U], controls=Controls(n_steps=12))
+    for lam, force in zip(hist.lam[1:], hist.reaction[1:]):
+        exact, _ = uniaxial_force(1 + lam * U / L, *mat, area0=2 * np.pi * R * t)
+        assert force == pytest.approx(exact, rel=1e-3)
+
+
+# MacNeal & Harder (1985) patch: 0.24 x 0.12 with four distorted interior nodes
+PATCH = np.array([[0, 0, 0], [0.24, 0, 0], [0.24, 0.12, 0], [0, 0.12, 0],
+                  [0.04, 0.02, 0], [0.18, 0.03, 0], [0.16, 0.08, 0], [0.08, 0.08, 0]])
+PATCH_CONN = np.array([[0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7], [4, 5, 6, 7]])
+
+
+def test_membrane_patch():
+    model = Shell(PATCH, PATCH_CONN, 0.001, 1e6, 0.25, BIG, 0.0, 1.0)
+    exact = lambda x, y: (1e-3 * (x + y / 2), 1e-3 * (y + x / 2))  # noqa: E731
+    prescribed = {k: 0.0 for k in dofs(range(8), [2, 3, 4])}
+    for a in range(4):
+        ux, uy = exact(*PATCH[a, :2])
+        prescribed.update({6 * a: ux, 6 * a + 1: uy, 6 * a + 5: 0.0})
+    u = linear_solution(model, prescribed).reshape(-1, 6)
+    for a in range(4, 8):
+        assert u[a, :2] == pytest.approx(exact(*PATCH[a, :2]), rel=1e-6, abs=1e-12)
+
+
+def test_bending_patch():
+    model = Shell(PATCH, PATCH_CONN, 0.001, 1e6, 0.25, BIG, 0.0, 1.0)
+    w = lambda x, y: 1e-3 * (x * x + x * y + y * y) / 2  # noqa: E731
+    rot = lambda x, y: (1e-3 * (y + x / 2), -1e-3 * (x + y / 2))  # noqa: E731  spin = e3 x grad(-w)
+    prescribed = {k: 0.0 for k in dofs(range(8), [0, 1, 5])}
+    for a in range(4):
+        x, y = PATCH[a, :2]
+        prescribed.update({6 * a + 2: w(x, y), 6 * a + 3: rot(x, y)[0], 6 * a + 4: rot(x, y)[1]})
+    u = linear_solution(model, prescribed).reshape(-1, 6)
+    for a in range(4, 8):
+        x, y = PATCH[a, :2]
+        assert u[a, 2] == pytest.approx(w(x, y), rel=1e-6)
+        assert u[a, 3:5] == pytest.approx(rot(x, y), rel=1e-6)
+
+
+def test_scordelis_lo_roof():
+    """Scordelis-Lo roof, quarter model: vertical displacement at the midside of the free
+    edge 0.3024 (MacNeal & Harder 1985, Finite Elem. Anal. Des. 1, 3-20, Table 6)."""
+    R, half_length, angle, t, n = 25.0, 25.0, np.deg2rad(40.0), 0.25, 16
+    X, conn = grid(np.linspace(0, angle, n + 1), np.linspace(0, half_length, n + 1),
+                   lambda phi, y: (R * np.sin(phi), y, R * np.cos(phi)))
+    model = Shell(X, conn, t, 4.32e8, 0.0, BIG, 0.0, 1.0)
+    loads = np.zeros(model.n_dof)
+    loads[2::6] = -90.0 / t * lumped_mass(X, conn, t, 1.0)[::6]  # 90 per unit area, downward
+    diaphragm = np.flatnonzero(np.isclose(X[:, 1], 0.0))
+    midspan = np.flatnonzero(np.isclose(X[:, 1], half_length))
+    crown = np.flatnonzero(np.isclose(X[:, 0], 0.0))
+    fixed = np.unique(np.concatenate([dofs(diaphragm, [0, 2, 4]), dofs(midspan, [1, 3, 5]),
+                                      dofs(crown, [0, 4, 5])]))
+    u = linear_solution(model, {k: 0.0 for k in fixed}, loads).reshape(-1, 6)
+    edge_mid = np.flatnonzero(np.isclose(X[:, 1], half_length) & np.isclose(X[:, 0], R * np.sin(angle)))
+    assert -u[edge_mid[0], 2] == pytest.approx(0.3024, rel=0.02)
+
+
+def test_strip_rolled_into_a_circle_by_end_moment():
+    """Cantilever under end moment M = 2 pi EI / L: the tip follows the circle of radius
+    EI / M(lambda) and closes the ring at lambda = 1 (elastica, nu = 0)."""
+    L, b, t, E = 12.0, 1.0, 0.1, 1.2e6
+    X, conn = grid(np.linspace(0, L, 17), np.linspace(0, b, 2))
+    model = Shell(X, conn, t, E, 0.0, BIG, 0.0, 1.0)
+    EI = E * b * t**3 / 12
+    clamp, tip = np.flatnonzero(X[:, 0] == 0), np.flatnonzero(X[:, 0] == L)
+    fixed = dofs(clamp, range(6))
+    model.hold(fixed)
+    loads = np.zeros(model.n_dof)
+    loads[dofs(tip, [4])] = -2 * np.pi * EI / L / len(tip)  # about -y: rolls towards +z
+    path = []
+    solve(model, fixed, loads=loads, controls=Controls(n_steps=40),
+          on_step=lambda lam: path.append((lam, model.x[tip].mean(axis=0))))
+    assert path[-1][0] == pytest.approx(1.0)
+    for lam, p in path:
+        kappa = lam * 2 * np.pi / L
+        exact = (np.sin(kappa * L) / kappa, (1 - np.cos(kappa * L)) / kappa)
+        assert np.hypot(p[0] - exact[0], p[2] - exact[1]) < 0.01 * L
+    closed = path[-1][1]
+    assert np.hypot(closed[0], closed[2]) < 0.01 * L  # back at the clamp
