@@ -413,11 +413,8 @@ def _buffers():
 
 
 @njit(cache=True)
-def _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat,
-                           state_old, state_new, active, buf):
-    """Force (buf[3]) and tangent (buf[4]) of element ``e`` incl. the drilling penalty."""
-    (xe, de, se, fe, ke, fp, fm, xp, dp, sp_, axis, act, grad, omega, om_p, om_m,
-     w3a, w3b, w3c, w43, scratch, work) = buf
+def _gather(e, conn, x, Q, D, T0, xe, de, se):
+    """Element nodes, directors Q_a D_a and drilling vectors Q_a T0_a."""
     for a in range(4):
         node = conn[e, a]
         for i in range(3):
@@ -425,8 +422,18 @@ def _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, 
             de[a, i] = Q[node, i, 0] * D[node, 0] + Q[node, i, 1] * D[node, 1] + Q[node, i, 2] * D[node, 2]
             se[a, i] = (Q[node, i, 0] * T0[e, a, 0] + Q[node, i, 1] * T0[e, a, 1]
                         + Q[node, i, 2] * T0[e, a, 2])
+
+
+@njit(cache=True)
+def _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat,
+                           state_old, state_new, active, buf):
+    """Force (buf[3]) and tangent (buf[4]) of element ``e`` incl. the drilling penalty."""
+    (xe, de, se, fe, ke, fp, fm, xp, dp, sp_, axis, act, grad, omega, om_p, om_m,
+     w3a, w3b, w3c, w43, scratch, work) = buf
+    _gather(e, conn, x, Q, D, T0, xe, de, se)
+    for a in range(4):
         for i in range(6):
-            act[6 * a + i] = active[6 * node + i]
+            act[6 * a + i] = active[6 * conn[e, a] + i]
     element_force(xe, de, se, Jinv[e], dV[e], shear_ref[e], Jc[e], area[e], h0, h[e], mat,
                   state_old[e], state_new[e], fe, work)
     element_tangent(xe, de, se, Jinv[e], dV[e], shear_ref[e], Jc[e], area[e], h0, h[e], mat,
@@ -455,6 +462,27 @@ def assemble(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state
         for i in range(24):
             for j in range(24):
                 kdata[e, 24 * i + j] = ke[i, j]
+
+
+@njit(cache=True)
+def internal_force(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_old,
+                   state_new, f):
+    """Internal force only (explicit dynamics): as :func:`assemble` without tangents.
+    The drilling penalty force is included through its difference gradient."""
+    buf = _buffers()
+    (xe, de, se, fe, ke, fp, fm, xp, dp, sp_, axis, act, grad, omega, om_p, om_m,
+     w3a, w3b, w3c, w43, scratch, work) = buf
+    f[:] = 0.0
+    for e in range(conn.shape[0]):
+        _gather(e, conn, x, Q, D, T0, xe, de, se)
+        element_force(xe, de, se, Jinv[e], dV[e], shear_ref[e], Jc[e], area[e], h0, h[e], mat,
+                      state_old[e], state_new[e], fe, work)
+        k_d = DRILL_FACTOR * mat[0] / (2.0 * (1.0 + mat[1])) * h0 * area[e]
+        drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_,
+                 w3a, w3b, w3c, w43)
+        for a in range(4):
+            for i in range(6):
+                f[6 * conn[e, a] + i] += fe[a, i]
 
 
 def tangent_pattern(conn):
@@ -571,6 +599,13 @@ class Shell:
         if self.contact is not None:
             K = K + self._contact(self._f)
         return K, self._f
+
+    def internal_force(self):
+        """Internal force at the trial configuration, without tangent (explicit use)."""
+        internal_force(self.conn, self.x, self.Q, self.D, self.T0, self.Jinv, self.dV,
+                       self.shear_ref, self.Jc, self.area, self.h0, self.h, self.mat, self.state,
+                       self._trial, self._f)
+        return self._f
 
     def _contact(self, f):
         nodes, axis, k = self.contact
