@@ -27,6 +27,8 @@ rule rom_fit:
         fit=f"{RES}/rom/{{case}}/fit.json",
         curve=f"{RES}/rom/{{case}}/curve.csv",
         trace=f"{RES}/rom/{{case}}/trace.h5",
+        shapes=f"{RES}/rom/{{case}}/shapes.csv",
+        paraview=f"{RES}/rom/{{case}}/shapes.pvd",
         plot=report(f"{RES}/rom/{{case}}/fit.png", caption="../report/rom_fit.rst",
                     category="ROM (Sec. 4.3)", subcategory="{case}"),
     log:

@@ -88,6 +88,11 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
             f"{fit['nfev']} evaluations, {fit['wall_s']:.1f} s.{status}</p>"
             + _table(["", *names], rows))
     figs = [_img(plots.fit_figure(prepared, curve, title=fit["item"]), f"fit {fit['item']}")]
+    if (fit_dir / "shapes.csv").exists() and any("markers" in s for s in prepared.samples.values()):
+        shapes = pd.read_csv(fit_dir / "shapes.csv")
+        shapes = shapes[shapes["displacement_mm"] > 0]
+        figs.append(_img(plots.shape_figure(prepared, shapes, title=f"{fit['item']}: bent shapes"),
+                         f"shapes {fit['item']}"))
     trace = _load_trace(fit_dir / "trace.h5")
     if trace is not None and len(trace):
         figs.append(_img(plots.trace_figure(trace, title=f"{fit['item']}: Nelder-Mead"),

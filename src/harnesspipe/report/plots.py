@@ -55,3 +55,28 @@ def png_bytes(fig) -> bytes:
     fig.savefig(buf, format="png")
     plt.close(fig)
     return buf.getvalue()
+
+
+def shape_figure(prepared, shapes, title=""):
+    """Bent shapes: measured marker positions (dots) against the model's centre line."""
+    fig, ax = plt.subplots(figsize=(5.2, 3.0), dpi=110)
+    frames = sorted(set(shapes["displacement_mm"]))
+    colours = plt.cm.viridis(np.linspace(0.0, 0.85, max(len(frames), 1)))
+    for d, c in zip(frames, colours):
+        s = shapes[shapes["displacement_mm"] == d]
+        ax.plot(s["x_mm"], s["y_mm"], color=c, lw=1.4, label=f"model, u = {d:g} mm")
+        for sample in prepared.samples.values():
+            m = sample.get("markers")
+            if m is None:
+                continue
+            m = m[np.isclose(m[:, 1], d)]
+            ax.plot(m[:, 3], m[:, 4], "o", ms=3.5, mfc="none", color=c)
+    ax.plot([], [], "o", mfc="none", color="0.3", label="markers (3 samples)")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    return fig

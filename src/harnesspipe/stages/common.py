@@ -56,3 +56,29 @@ def write_fit(outdir: Path, *, stage: str, item: str, test_id: str, parameters: 
 def read_fit(path: Path) -> dict:
     with open(path) as f:
         return json.load(f)
+
+
+def write_shapes(outdir: Path, shapes: dict, stem: str = "shape") -> Path:
+    """Deformed centre lines for ParaView: one VTU (polyline) per frame and a PVD index.
+
+    ``shapes`` maps a crosshead displacement to an (n_nodes, 3) array.  Also writes
+    ``shapes.csv`` (displacement_mm, node, x_mm, y_mm, z_mm) for plotting.
+    """
+    import meshio
+
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    entries, rows = [], []
+    for k, (d, xyz) in enumerate(sorted(shapes.items())):
+        xyz = np.asarray(xyz, dtype=float)
+        cells = [("line", np.column_stack([np.arange(len(xyz) - 1), np.arange(1, len(xyz))]))]
+        name = f"{stem}_{k:03d}.vtu"
+        meshio.write(outdir / name, meshio.Mesh(xyz, cells))
+        entries.append(f'    <DataSet timestep="{float(d):g}" file="{name}"/>')
+        rows += [(float(d), i, *p) for i, p in enumerate(xyz)]
+    pvd = outdir / "shapes.pvd"
+    pvd.write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
+                   + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
+    write_csv(outdir / "shapes.csv",
+              pd.DataFrame(rows, columns=["displacement_mm", "node", "x_mm", "y_mm", "z_mm"]))
+    return pvd

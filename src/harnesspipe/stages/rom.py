@@ -21,18 +21,22 @@ from harnesspipe.calibrate import eq13
 from harnesspipe.calibrate.objective import l2_error, relative_l2_error
 from harnesspipe.calibrate.simplex import nelder_mead
 from harnesspipe.report import plots
-from harnesspipe.stages.common import read_fit, write_csv, write_fit
+from harnesspipe.stages.common import read_fit, write_csv, write_fit, write_shapes
 from harnesspipe.stages.data import read_prepared
 
 TABLE3_COLUMNS = ["case", "E", "sigma_y", "K", "n", "reference"]
 
 
-def simulate(params: dict, settings: dict) -> pd.DataFrame:
+SHAPE_DEFLECTIONS = (0.0, 10.0, 20.0, 30.0)  # frames written for ParaView and the report
+
+
+def simulate(params: dict, settings: dict, return_shapes: bool = False):
     """ROM three-point curve for effective properties ``params`` (E, sigma_y, K, n)."""
     tp = settings["three_point"]
     return rom.three_point(E=params["E"], sigma_y=params["sigma_y"], K=params["K"], n=params["n"],
                            radius=settings["r_o"], supports=settings["supports"], span=tp["span"],
                            overhang=tp["overhang"], deflection=tp["deflection"],
+                           return_shapes=return_shapes, shape_at=SHAPE_DEFLECTIONS,
                            **settings["mesh"])
 
 
@@ -72,7 +76,9 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
                       fatol=rs["simplex"]["fatol"], maxfev=settings["maxfev"],
                       log_path=outdir / "trace.h5", key=_objective_key(u, F, settings))
     best = params_of(res.x)
-    curve = simulate(best, settings).rename(columns={"deflection_mm": "displacement_mm"})
+    curve, shapes = simulate(best, settings, return_shapes=True)
+    curve = curve.rename(columns={"deflection_mm": "displacement_mm"})
+    write_shapes(outdir, shapes)
     F_fit = np.interp(u, curve["displacement_mm"], curve["force_N"])
     path = write_fit(outdir, stage="rom", item=case, test_id=ref.test_id,
                      parameters={k: best[k] for k in ("E", "sigma_y", "K", "n")},
