@@ -211,11 +211,11 @@ def work_arrays():
 
 
 @njit(cache=True)
-def element_force(x, d, s, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_old, state_new, fe, work):
+def element_force(x, d, Jinv, dV, shear_ref, h0, h, mat, state_old, state_new, fe, work):
     """Internal force ``fe`` (4, 6) (forces, moments) of one element.
 
-    ``x`` (4, 3) current nodes, ``d`` (4, 3) current directors, ``s`` (4, 3) current
-    drilling reference vectors Q_a T0_a, reference data from :func:`reference_element`,
+    ``x`` (4, 3) current nodes, ``d`` (4, 3) current directors, reference data from
+    :func:`reference_element`,
     ``mat`` = (E, nu, sigma_y, K, n), history (4 * 5, STATE_SIZE), ``work`` from
     :func:`work_arrays`.
     """
@@ -284,11 +284,11 @@ def element_force(x, d, s, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_old,
             weights = (a_xi * 0.5 * (1.0 - eta), a_xi * 0.5 * (1.0 + eta),
                        a_eta * 0.5 * (1.0 - xi), a_eta * 0.5 * (1.0 + xi))
             for p in range(4):
-                _shear_variation(p, weights[p] * tau, x, d, gi_t[p], gz_t[p], h0, fe, N, dN, tmp)
+                _shear_variation(p, weights[p] * tau, d, gi_t[p], gz_t[p], h0, fe, N, dN, tmp)
 
 
 @njit(cache=True)
-def _shear_variation(p, coef, x, d, gi, gz, h0, fe, N, dN, tmp):
+def _shear_variation(p, coef, d, gi, gz, h0, fe, N, dN, tmp):
     """Add coef * d(g_i . g_zeta)/dq at tying point ``p`` to ``fe``."""
     shape(TYING[p, 0], TYING[p, 1], N, dN)
     col = 0 if p < 2 else 1
@@ -366,8 +366,8 @@ def drilling(x, d, r, Jc, k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, rp, w3a,
 
 
 @njit(cache=True)
-def element_tangent(x, d, s, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_old, scratch,
-                    active, ke, fp, fm, xp, dp, sp_, axis, work):
+def element_tangent(x, d, Jinv, dV, shear_ref, h0, h, mat, state_old, scratch, active, ke, fp, fm,
+                    xp, dp, axis, work):
     """Central-difference tangent ``ke`` (24, 24) of :func:`element_force`; columns of
     inactive DOFs (``active[j] == False``, held fixed) are left zero.  Central, not
     forward, differences: the O(h) error of the latter spoils Newton on thin shells,
@@ -385,16 +385,14 @@ def element_tangent(x, d, s, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_ol
         for sign in (1.0, -1.0):
             xp[:, :] = x
             dp[:, :] = d
-            sp_[:, :] = s
             if c < 3:
                 xp[a, c] += sign * hu
             else:
                 axis[:] = 0.0
                 axis[c - 3] = 1.0
                 rotate(d[a], axis, sign * FD_STEP, dp[a])
-                rotate(s[a], axis, sign * FD_STEP, sp_[a])
-            element_force(xp, dp, sp_, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_old,
-                          scratch, fp if sign > 0 else fm, work)
+            element_force(xp, dp, Jinv, dV, shear_ref, h0, h, mat, state_old, scratch,
+                          fp if sign > 0 else fm, work)
         step = 2.0 * (hu if c < 3 else FD_STEP)
         for b in range(4):
             for i in range(6):
@@ -434,10 +432,10 @@ def _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, 
     for a in range(4):
         for i in range(6):
             act[6 * a + i] = active[6 * conn[e, a] + i]
-    element_force(xe, de, se, Jinv[e], dV[e], shear_ref[e], Jc[e], area[e], h0, h[e], mat,
-                  state_old[e], state_new[e], fe, work)
-    element_tangent(xe, de, se, Jinv[e], dV[e], shear_ref[e], Jc[e], area[e], h0, h[e], mat,
-                    state_old[e], scratch, act, ke, fp, fm, xp, dp, sp_, axis, work)
+    element_force(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, state_old[e], state_new[e],
+                  fe, work)
+    element_tangent(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, state_old[e], scratch, act,
+                    ke, fp, fm, xp, dp, axis, work)
     k_d = DRILL_FACTOR * mat[0] / (2.0 * (1.0 + mat[1])) * h0 * area[e]
     drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_,
              w3a, w3b, w3c, w43)
@@ -475,8 +473,8 @@ def internal_force(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat,
     f[:] = 0.0
     for e in range(conn.shape[0]):
         _gather(e, conn, x, Q, D, T0, xe, de, se)
-        element_force(xe, de, se, Jinv[e], dV[e], shear_ref[e], Jc[e], area[e], h0, h[e], mat,
-                      state_old[e], state_new[e], fe, work)
+        element_force(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, state_old[e],
+                      state_new[e], fe, work)
         k_d = DRILL_FACTOR * mat[0] / (2.0 * (1.0 + mat[1])) * h0 * area[e]
         drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_,
                  w3a, w3b, w3c, w43)

@@ -4,7 +4,8 @@ Load and displacement control share one load factor lambda in [0, 1]: driven
 DOFs move by ``lambda * drive`` and external loads are ``lambda * loads``.  Each
 step starts with a consistent predictor (the prescribed increment is carried into
 the free DOFs through the tangent), Newton iterates on the free DOFs with the
-consistent tangent, and a step that does not converge is cut in half.
+consistent tangent, and a step that does not converge is cut in half (the step
+grows back to the nominal one after easy steps).
 
 A model takes part through four methods (see :class:`System`): the tangent and
 internal force at the trial configuration, an increment of that configuration
@@ -49,7 +50,7 @@ class Controls:
     rtol: float = 1e-8        # free residual / reference force
     atol: float = 1e-10       # absolute floor on the free residual (N)
     max_iter: int = 25
-    max_cuts: int = 10
+    max_cuts: int = 10        # consecutive halvings of one step
 
 
 @dataclass
@@ -91,7 +92,8 @@ def solve(system: System, fixed, driven=None, drive=None, loads=None,
     constrained = np.union1d(np.asarray(fixed, dtype=np.int64), driven)
     free = np.setdiff1d(np.arange(n), constrained)
     hist = History()
-    lam, dlam, cuts = 0.0, 1.0 / controls.n_steps, 0
+    nominal = 1.0 / controls.n_steps
+    lam, dlam, cuts = 0.0, nominal, 0
     while lam < 1.0 - 1e-12:
         dlam = min(dlam, 1.0 - lam)
         iters, f_int = _newton_step(system, free, driven, drive * dlam, loads, lam + dlam, controls)
@@ -109,6 +111,9 @@ def solve(system: System, fixed, driven=None, drive=None, loads=None,
         hist.reaction.append(float(f_int[driven].sum()) if driven.size else 0.0)
         hist.iterations.append(iters)
         system.accept()
+        cuts = 0
+        if iters <= controls.max_iter // 4:
+            dlam = min(2.0 * dlam, nominal)  # recover the nominal step after a cut
         if on_step is not None:
             on_step(lam)
     return hist

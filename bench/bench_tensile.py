@@ -1,0 +1,151 @@
+"""Benchmark of the tensile stage: one simulation and one calibration per component.
+
+Run with the project's venv: ``.venv/bin/python bench/bench_tensile.py [--repeat N]``.
+Appends the figures under "## Tensile" in bench/RESULTS.md (replacing that
+section only).  Measures, on one thread:
+
+* JIT: the first simulation of each kind in a fresh process, with an empty Numba
+  cache and from the cache;
+* one warm simulation per component and preset (median of ``--repeat``);
+* one full calibration per component (default preset) from a noise-free
+  synthetic curve made at Table 2, with the number of simulations and the
+  recovered parameters;
+* the 3D shell cells (closed and open tube) against the axisymmetric cell over
+  the whole curve, showing what the cut does.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+RESULTS = Path(__file__).resolve().parent / "RESULTS.md"
+HEADING = "## Tensile"
+TABLE2 = {"closed_tube": (1559.0, 8.6, 25.6, 0.12), "open_tube": (698.0, 8.8, 23.1, 0.83),
+          "fabric_tube": (93.5, 10.0, 30.8, 0.60)}
+FIRST_CALL = """
+import time
+t0 = time.perf_counter()
+from harnesspipe.models.tensile import simulate
+simulate("closed_tube", 1559.0, 8.6, 25.6, 0.12, preset="quick")
+t1 = time.perf_counter()
+simulate("fabric_tube", 93.5, 10.0, 30.8, 0.6, preset="quick")
+print(t1 - t0, time.perf_counter() - t1)
+"""
+
+
+def first_calls(cache: str) -> tuple[float, float]:
+    """(axisymmetric tube, 3D shell fabric) first-call seconds in a fresh process."""
+    env = {**os.environ, "HARNESSPIPE_NUMBA_CACHE": cache, "NUMBA_NUM_THREADS": "1"}
+    out = subprocess.run([sys.executable, "-c", FIRST_CALL], env=env, check=True,
+                         capture_output=True, text=True)
+    tube, fabric = out.stdout.split()
+    return float(tube), float(fabric)
+
+
+def warm_median(component: str, preset: str, repeat: int) -> float:
+    from harnesspipe.models.tensile import simulate
+    simulate(component, *TABLE2[component], preset=preset)
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        simulate(component, *TABLE2[component], preset=preset)
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def calibration(component: str) -> str:
+    from harnesspipe.calibrate.tensile import calibrate_fabric, calibrate_tube
+    from harnesspipe.models.tensile import simulate
+    truth = TABLE2[component]
+    measured = simulate(component, *truth)
+    t0 = time.perf_counter()
+    if component == "fabric_tube":
+        params, fit = calibrate_fabric(measured)
+    else:
+        params, fit = calibrate_tube(component, measured, maxfev=1000, xatol=1e-6, fatol=1e-8)
+    wall = time.perf_counter() - t0
+    target = dict(zip(("E", "sigma_y", "K", "n"), truth))
+    worst = max(abs(params[k] / v - 1.0) for k, v in target.items())
+    found = ", ".join(f"{k} {params[k]:.4g}" for k in target)
+    searched = fit.trace[fit.names].to_numpy() / [target[k] for k in fit.names]
+    close = np.abs(searched - 1.0).max(axis=1) < 0.02
+    first = int(np.argmax(close)) + 1 if close.any() else None
+    return (f"- {component}: {wall:.1f} s, {fit.nfev} simulations "
+            f"({wall / fit.nfev * 1e3:.0f} ms each), converged {fit.converged}; {found}; "
+            f"largest deviation from Table 2 {100 * worst:.3f} %; first evaluation within 2 %: "
+            f"{first}")
+
+
+def shell_cells() -> str:
+    from harnesspipe.models.tensile import resolution, simulate, simulate_shell_tube
+    truth = TABLE2["open_tube"]
+    res = resolution("default", meridian=8, circumference=12, n_steps=25)
+    axi = simulate("open_tube", *truth)
+    rows = []
+    for cut in (False, True):
+        t0 = time.perf_counter()
+        df = simulate_shell_tube(*truth, cut=cut, res=res)
+        rows.append((cut, time.perf_counter() - t0, df))
+    picks = [5, 10, 15, 20, 25]
+
+    def at(df):
+        return " / ".join(f"{np.interp(u, df.displacement_mm, df.force_N):.1f}" for u in picks)
+
+    lines = [f"- axisymmetric cell (default, 32 elements): F at u = {picks} mm: {at(axi)} N"]
+    for cut, wall, df in rows:
+        lines.append(f"- 3D shell cell, 8 x 12 elements, {'open (cut + contact)' if cut else 'closed'}:"
+                     f" {at(df)} N ({wall:.1f} s)")
+    return "\n".join(lines)
+
+
+def write_section(text: str) -> None:
+    old = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
+    start = old.find(HEADING + "\n")
+    if start >= 0:
+        nxt = old.find("\n## ", start + len(HEADING))
+        old = old[:start].rstrip() + ("\n" + old[nxt:] if nxt >= 0 else "")
+    RESULTS.write_text(old.rstrip() + "\n\n" + text.rstrip() + "\n")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=10)
+    ap.add_argument("--no-write", action="store_true")
+    args = ap.parse_args()
+    import numba
+    numba.set_num_threads(1)
+    with tempfile.TemporaryDirectory() as cache:
+        cold = first_calls(cache)
+        cached = first_calls(cache)
+    sims = [f"- {c}, {p}: {1e3 * warm_median(c, p, args.repeat):.1f} ms"
+            for c in TABLE2 for p in ("quick", "default")]
+    cals = [calibration(c) for c in TABLE2]
+    text = (f"{HEADING}\n\n"
+            f"`bench/bench_tensile.py`, {time.strftime('%Y-%m-%d')}, "
+            f"{platform.processor() or platform.machine()}, Python {platform.python_version()}, "
+            f"numba {numba.__version__}, one thread.  Tubes: axisymmetric half-pitch cell "
+            f"(quick 12, default 32 elements, 16/25 steps); fabric: one 3D shell element "
+            f"(homogeneous uniaxial stress), 16/25 steps.\n\n"
+            f"JIT (first simulation in a fresh process; tube then fabric):\n"
+            f"- empty Numba cache: {cold[0]:.1f} s (axisymmetric tube), {cold[1]:.1f} s (3D shell)\n"
+            f"- from the cache: {cached[0]:.2f} s, {cached[1]:.2f} s\n\n"
+            f"One simulation, warm (median of {args.repeat}):\n" + "\n".join(sims) + "\n\n"
+            f"Full calibration, default preset, from the literature initial guess, "
+            f"noise-free synthetic curve at Table 2:\n" + "\n".join(cals) + "\n\n"
+            f"Cut or no cut (open-tube material of Table 2):\n{shell_cells()}\n")
+    print(text)
+    if not args.no_write:
+        write_section(text)
+
+
+if __name__ == "__main__":
+    main()
