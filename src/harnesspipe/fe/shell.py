@@ -13,6 +13,9 @@ Formulation (total Lagrangian, continuum-based / degenerated solid shell):
   Lambrecht 2002) and the second Piola-Kirchhoff stress S = T : dE_H/dE.
 * Transverse shear: MITC4 assumed natural strains tied at the edge midpoints
   (Dvorkin & Bathe 1984), elastic with kappa_s = 5/6, as in Abaqus shells.
+* Full 2 x 2 in-plane integration has no hourglass modes, so the hourglass
+  control that the paper's reduced-integration Abaqus shell needs is not
+  required here; MITC4 removes transverse shear locking.
 * Drilling rotation: penalty tying each nodal triad to the polar rotation of the
   element centre (a finite-rotation form of Hughes & Brezzi 1989; energy
   1/2 k_d omega^2, k_d = DRILL_FACTOR G h0 A), the rotational "hourglass"
