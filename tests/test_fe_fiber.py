@@ -73,3 +73,18 @@ def test_section_tangent_matches_finite_difference():
         section_response(*(e + h * np.eye(3)[j]), y, z, A, *hist, E, sigma_y, K, n, False, sp, np.zeros((3, 3)))
         section_response(*(e - h * np.eye(3)[j]), y, z, A, *hist, E, sigma_y, K, n, False, sm, np.zeros((3, 3)))
         assert np.allclose(D[:, j], (sp - sm) / (2 * h), rtol=1e-5, atol=1e-6 * np.abs(D).max())
+
+
+@pytest.mark.parametrize("n", [0.12, 0.3, 1.0, 1.5, 2.0])
+@pytest.mark.parametrize("alpha_old", [0.0, 1e-9, 1e-3, 0.2])
+def test_return_map_solves_eq2_and_gives_the_slope(n, alpha_old):
+    from harnesspipe.fe.hardening import hardening_slope, return_map
+    c, sigma_y, K = 1559.0, 8.6, 25.6
+    for over in (1e-9, 1e-4, 1e-2, 0.5, 10.0):
+        q = flow_stress(alpha_old, sigma_y, K, n) * (1.0 + over)
+        dg, H = return_map(q, c, alpha_old, sigma_y, K, n)
+        assert dg > 0.0
+        assert q - c * dg == pytest.approx(flow_stress(alpha_old + dg, sigma_y, K, n), rel=1e-11)
+        assert H == pytest.approx(hardening_slope(alpha_old + dg, K, n), rel=1e-9)
+    assert return_map(0.999 * flow_stress(alpha_old, sigma_y, K, n), c, alpha_old,
+                      sigma_y, K, n)[0] == 0.0

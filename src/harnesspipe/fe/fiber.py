@@ -8,16 +8,18 @@ I = pi r^4 / 4); plastic resultants converge as the rule is refined.
 
 Fibre law: 1D return mapping of J2 plasticity with the isotropic power-law
 hardening of eq. 2 (sigma_Y + K eps_p^n), no kinematic hardening; the scalar
-return is :func:`harnesspipe.fe.hardening.plastic_increment` with ``c = E``;
+return is :func:`harnesspipe.fe.hardening.return_map` with ``c = E``;
 the consistent tangent is ``E H / (E + H)`` with ``H`` the hardening slope
-(Simo & Hughes 1998, sec. 1.4).  Shear and torsion stay elastic.
+(Simo & Hughes 1998, sec. 1.4).  Shear and torsion stay elastic.  Since the flow
+stress never falls below sigma_Y, a fibre whose trial stress is within +-sigma_Y is
+elastic without evaluating eq. 2 (most of the section at any time).
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.hardening import hardening_slope, plastic_increment
+from harnesspipe.fe.hardening import return_map
 
 
 def disc_fibres(radius: float, n_rings: int = 4, n_sectors: int = 16):
@@ -47,16 +49,15 @@ def fibre_update(eps, eps_p_old, alpha_old, E, sigma_y, K, n, elastic):
     (equivalent) plastic strain.  Returns ``(sigma, E_t, eps_p, alpha)``.
     """
     sigma_trial = E * (eps - eps_p_old)
-    if elastic:
-        return sigma_trial, E, eps_p_old, alpha_old
     q_trial = abs(sigma_trial)
-    dgamma = plastic_increment(q_trial, E, alpha_old, sigma_y, K, n)
+    if elastic or q_trial <= sigma_y:
+        return sigma_trial, E, eps_p_old, alpha_old
+    dgamma, H = return_map(q_trial, E, alpha_old, sigma_y, K, n)
     if dgamma <= 0.0:
         return sigma_trial, E, eps_p_old, alpha_old
     sign = 1.0 if sigma_trial >= 0.0 else -1.0
-    alpha = alpha_old + dgamma
-    H = hardening_slope(alpha, K, n)
-    return sigma_trial - sign * E * dgamma, E * H / (E + H), eps_p_old + sign * dgamma, alpha
+    return (sigma_trial - sign * E * dgamma, E * H / (E + H), eps_p_old + sign * dgamma,
+            alpha_old + dgamma)
 
 
 @njit(cache=True)
@@ -68,29 +69,45 @@ def section_response(e0, kappa_y, kappa_z, y, z, area, eps_p_old, alpha_old,
     ``s = (N, M_y, M_z)`` with ``M_y = int sigma z dA``, ``M_z = -int sigma y dA``
     and the section tangent ``D = ds/de`` (3x3); trial history into ``*_new``.
     """
-    for i in range(3):
-        s[i] = 0.0
-        for j in range(3):
-            D[i, j] = 0.0
+    s0 = s1 = s2 = 0.0
+    d00 = d01 = d02 = d11 = d12 = d22 = 0.0
     for f in range(y.shape[0]):
         yf = y[f]
         zf = z[f]
-        eps = e0 + zf * kappa_y - yf * kappa_z
-        sig, Et, ep, al = fibre_update(eps, eps_p_old[f], alpha_old[f], E, sigma_y, K, n, elastic)
+        ep = eps_p_old[f]
+        al = alpha_old[f]
+        sig = E * (e0 + zf * kappa_y - yf * kappa_z - ep)
+        Et = E
+        if not elastic and abs(sig) > sigma_y:      # possibly plastic: eq. 2 return
+            dg, H = return_map(abs(sig), E, al, sigma_y, K, n)
+            if dg > 0.0:
+                dgs = dg if sig >= 0.0 else -dg
+                sig -= E * dgs
+                ep += dgs
+                al += dg
+                Et = E * H / (E + H)
         eps_p_new[f] = ep
         alpha_new[f] = al
         a = area[f]
         sa = sig * a
-        s[0] += sa
-        s[1] += sa * zf
-        s[2] -= sa * yf
+        s0 += sa
+        s1 += sa * zf
+        s2 -= sa * yf
         ka = Et * a
-        D[0, 0] += ka
-        D[0, 1] += ka * zf
-        D[0, 2] -= ka * yf
-        D[1, 1] += ka * zf * zf
-        D[1, 2] -= ka * zf * yf
-        D[2, 2] += ka * yf * yf
-    D[1, 0] = D[0, 1]
-    D[2, 0] = D[0, 2]
-    D[2, 1] = D[1, 2]
+        kz = ka * zf
+        ky = ka * yf
+        d00 += ka
+        d01 += kz
+        d02 -= ky
+        d11 += kz * zf
+        d12 -= kz * yf
+        d22 += ky * yf
+    s[0] = s0
+    s[1] = s1
+    s[2] = s2
+    D[0, 0] = d00
+    D[0, 1] = D[1, 0] = d01
+    D[0, 2] = D[2, 0] = d02
+    D[1, 1] = d11
+    D[1, 2] = D[2, 1] = d12
+    D[2, 2] = d22

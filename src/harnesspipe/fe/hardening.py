@@ -4,11 +4,26 @@ Eq. 2:  sigma_bar = sigma_Y + K * (eps_bar_p)**n   once sigma_bar >= sigma_Y.
 
 For n < 1 the slope  K n eps_p**(n-1)  is infinite at eps_p = 0.  The slope is
 therefore evaluated at ``max(eps_p, EPS_P_FLOOR)``; the flow stress itself is
-always exact.  The plastic increment is found by a bracketed Newton iteration
-(bisection fallback), which never evaluates the slope at zero.
+always exact.
+
+Return mapping.  With ``A = q_trial - sigma_Y + c eps_p_old`` the consistency
+condition ``q_trial - c dg = sigma_bar(eps_p_old + dg)`` reads, for the total
+plastic strain ``e = eps_p_old + dg``,
+
+    h = A - c e - K e**n = 0.
+
+For n < 1 it is solved for ``s = e**n`` instead (``e = s**(1/n)``): then
+``h(s) = A - K s - c s**(1/n)`` is smooth at the virgin state (slope -K, not
+infinite) and, like ``h(e)`` for n > 1, concave and decreasing.  Newton's method
+started at the committed state (where h > 0) therefore steps once to the right of
+the root and then converges monotonically and quadratically (no bracketing or
+bisection needed; a clamp to the admissible interval guards round-off).  The
+first step is the classical linearised return ``dg = f0 / (c + H)``.  Each
+iteration costs one power, taken as ``exp(p log x)``.
 """
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 EPS_P_FLOOR = 1.0e-12  # smallest plastic strain at which the hardening slope is taken
@@ -17,11 +32,17 @@ RETURN_MAXIT = 60
 
 
 @njit(cache=True)
+def _pow(x, p):
+    """x**p for x > 0 (exp/log form: one transcendental pair, no special cases)."""
+    return np.exp(p * np.log(x))
+
+
+@njit(cache=True)
 def flow_stress(eps_p, sigma_y, K, n):
     """Flow stress sigma_Y + K eps_p**n (eq. 2)."""
     if eps_p <= 0.0:
         return sigma_y
-    return sigma_y + K * eps_p**n
+    return sigma_y + K * _pow(eps_p, n)
 
 
 @njit(cache=True)
@@ -30,7 +51,56 @@ def hardening_slope(eps_p, K, n):
     if K == 0.0:
         return 0.0
     e = eps_p if eps_p > EPS_P_FLOOR else EPS_P_FLOOR
-    return K * n * e ** (n - 1.0)
+    return K * n * _pow(e, n - 1.0)
+
+
+@njit(cache=True)
+def return_map(q_trial, c, eps_p_old, sigma_y, K, n):
+    """Plastic increment and hardening slope: ``(dg, H(eps_p_old + dg))``.
+
+    Solves ``q_trial - c*dg = flow_stress(eps_p_old + dg)`` for ``dg >= 0`` (see the
+    module docstring); ``dg = 0`` (and ``H = 0``) when the trial state is elastic.
+    ``c`` is the elastic stiffness conjugate to ``q_trial``: ``E`` for a uniaxial
+    fibre, ``3G`` for the 3D radial return.  ``H`` is :func:`hardening_slope` at the
+    returned state, obtained without another power.
+    """
+    a = eps_p_old
+    sa = _pow(a, n) if (a > 0.0 and K != 0.0) else 0.0   # a**n
+    f0 = q_trial - sigma_y - K * sa
+    if f0 <= 0.0:
+        return 0.0, 0.0
+    if K == 0.0:
+        return f0 / c, 0.0
+    if n == 1.0:
+        return f0 / (c + K), K
+    A = f0 + K * sa + c * a
+    tol = RETURN_TOL * (q_trial if q_trial > 1.0 else 1.0)
+    if n < 1.0:
+        m = 1.0 / n
+        s = sa                          # unknown s = e**n, h(s) = A - K s - c s**m
+        hi = A / K                      # h(hi) < 0
+        e = a
+        for _ in range(RETURN_MAXIT):
+            e = _pow(s, m) if s > 0.0 else 0.0
+            h = A - K * s - c * e
+            if abs(h) <= tol:
+                break
+            s = min(max(s + h / (K + (c * m * e / s if s > 0.0 else 0.0)), sa), hi)
+        dg = e - a if e > a else 0.0
+        if e <= EPS_P_FLOOR:
+            return dg, hardening_slope(e, K, n)
+        return dg, K * n * s / e        # K n e**(n-1) with s = e**n
+    e = a                               # n > 1: unknown e, h(e) = A - c e - K e**n
+    hi = a + f0 / c                     # h(hi) <= 0
+    se = sa
+    for _ in range(RETURN_MAXIT):
+        h = A - c * e - K * se
+        if abs(h) <= tol:
+            break
+        dh = c + (K * n * se / e if e > 0.0 else 0.0)
+        e = min(max(e + h / dh, a), hi)
+        se = _pow(e, n)
+    return e - a, hardening_slope(e, K, n)
 
 
 @njit(cache=True)
@@ -39,26 +109,6 @@ def plastic_increment(q_trial, c, eps_p_old, sigma_y, K, n):
 
     ``q_trial`` is the trial equivalent stress and ``c`` the elastic stiffness
     conjugate to it: ``E`` for a uniaxial fibre, ``3G`` for the 3D radial return.
-    Returns 0 if the trial state is elastic.  The root is bracketed in
-    [0, (q_trial - sigma_Y)/c], so the iteration cannot leave the admissible range.
+    Returns 0 if the trial state is elastic (see :func:`return_map`).
     """
-    f0 = q_trial - flow_stress(eps_p_old, sigma_y, K, n)
-    if f0 <= 0.0:
-        return 0.0
-    lo = 0.0
-    hi = (q_trial - sigma_y) / c
-    dg = hi if K == 0.0 else 0.5 * hi
-    scale = q_trial if q_trial > 1.0 else 1.0
-    for _ in range(RETURN_MAXIT):
-        ep = eps_p_old + dg
-        f = q_trial - c * dg - flow_stress(ep, sigma_y, K, n)
-        if abs(f) <= RETURN_TOL * scale:
-            return dg
-        if f > 0.0:
-            lo = dg
-        else:
-            hi = dg
-        df = -c - hardening_slope(ep, K, n)
-        step = dg - f / df
-        dg = step if lo < step < hi else 0.5 * (lo + hi)
-    return dg
+    return return_map(q_trial, c, eps_p_old, sigma_y, K, n)[0]
