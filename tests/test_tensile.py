@@ -117,3 +117,12 @@ def test_fabric_calibration_recovers_table2():
     for name, value in zip(("E", "sigma_y", "K", "n"), truth):
         assert params[name] == pytest.approx(value, rel=0.02)
     assert len(fit.trace) == fit.nfev
+
+
+def test_simulate_rejects_bad_input():
+    with pytest.raises(ValueError, match="component"):
+        simulate("steel_tube", 1.0, 1.0, 1.0, 1.0)
+    with pytest.raises(ValueError, match="invalid material"):
+        simulate("closed_tube", -1559.0, 8.6, 25.6, 0.12)
+    with pytest.raises(ValueError, match="model"):
+        simulate("fabric_tube", 93.5, 10.0, 30.8, 0.6, model="axisymmetric")

@@ -237,7 +237,8 @@ def simulate(component: str, E: float, sigma_y: float, K: float, n: float, nu: f
     0.4 (polyester).  ``preset``: ``"quick"`` or ``"default"`` (or a
     :class:`Resolution`); ``mesh`` overrides its fields (``meridian=``,
     ``circumference=``, ``fabric_length=``, ``fabric_width=``, ``n_steps=``).
-    ``model`` (tubes): ``"axisymmetric"`` (default, cut neglected) or ``"shell3d"``.
+    ``model``: ``"axisymmetric"`` (tubes' default, cut neglected) or ``"shell3d"`` (the
+    fabric's only model).
     ``pitch``: corrugation pitch of the tubes.  ``elongation``: crosshead travel
     of the fabric test (default 15 mm); the tubes follow the paper (25 mm on the
     half model).  Displacement is that of the paper's model: the half model's
@@ -245,7 +246,13 @@ def simulate(component: str, E: float, sigma_y: float, K: float, n: float, nu: f
     """
     if component not in COMPONENTS:
         raise ValueError(f"unknown component {component!r}; expected one of {COMPONENTS}")
+    if model not in (None, "axisymmetric", "shell3d") or (model == "axisymmetric"
+                                                          and component == "fabric_tube"):
+        raise ValueError(f"model {model!r} is not available for {component}")
     nu = POISSON[component] if nu is None else nu
+    if not (E > 0 and sigma_y >= 0 and K >= 0 and n > 0 and -1.0 < nu < 0.5):
+        raise ValueError(f"invalid material: E={E}, sigma_y={sigma_y}, K={K}, n={n}, nu={nu} "
+                         "(need E > 0, sigma_y >= 0, K >= 0, n > 0, -1 < nu < 0.5)")
     res = resolution(preset, **mesh)
     if component in ("closed_tube", "open_tube") and model in (None, "axisymmetric"):
         return simulate_axisymmetric_tube(E, sigma_y, K, n, nu, geometry=TubeGeometry(pitch=pitch),
