@@ -1,0 +1,211 @@
+"""Kernels of the branch ROM (Sec. 5): the finite-rotation bushing and the strand truss.
+
+Bushing (eqs. 14-15).  Node ``a`` carries the connector frame ``E0`` (columns:
+axis 1 along the break-out TWB, axes 2 and 3 across it), which rotates with the
+node.  The six relative motions, in that frame, are
+
+    d_t = E0^T (R_a^T (x_b - x_a) - (X_b - X_a))      (translations)
+    d_r = E0^T log(R_a^T R_b)                          (rotations: torsion, two bendings)
+
+so a rigid motion of the pair strains nothing, also for finite rotations (the
+Cartesian and flexion-torsion measures of a bushing).  The connector force is
+Kelvin-Voigt, ``s = K (d + alpha d_dot)`` with the diagonal K of eq. 14 and
+C = alpha K of eq. 15.  The rate ``d_dot`` comes from the Newmark relations of
+the time integrator applied to d itself,
+
+    d_dot = c_d (d - d_n) + c_v d_dot_n + c_a d_ddot_n,
+
+which equals B v for small motions and stays objective for large ones; the
+coefficients are the integrator's (``harnesspipe.fe.newmark_band``).  Hence
+ds/dd = (1 + alpha c_d) K.  Nodal forces are f = B^T s with
+B = dd/d(x_a, w_a, x_b, w_b) (spatial spins w); the tangent is B^T (ds/dd) B plus
+the geometric terms of R_a and of the log map (``kh_matrix``).  The damping
+force's dependence on the displacement through B in the tangent is exact because
+the rate is a function of d only.
+
+Strand: a co-rotational truss (axial force only) of the aramid strand H.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from harnesspipe.fe.rotation import kh_matrix, log_matrix, quat_to_matrix, skew, ts_inv
+
+NDOF_NODE = 6
+
+
+@njit(cache=True)
+def _mat_t_vec(R, v, out):
+    """out = R^T v (3)."""
+    for i in range(3):
+        out[i] = R[0, i] * v[0] + R[1, i] * v[1] + R[2, i] * v[2]
+
+
+@njit(cache=True)
+def _mat_vec(R, v, out):
+    """out = R v (3)."""
+    for i in range(3):
+        out[i] = R[i, 0] * v[0] + R[i, 1] * v[1] + R[i, 2] * v[2]
+
+
+@njit(cache=True)
+def bushing_response(dX, xa, xb, qa, qb, E0, k_diag, alpha, c_d, c_v, c_a,
+                     d_n, d_dot_n, d_ddot_n, d, d_dot, f, K):
+    """Relative motion ``d``, its rate ``d_dot``, nodal force ``f`` (12) and tangent ``K``.
+
+    ``dX`` = X_b - X_a (reference), ``xa, xb`` current positions, ``qa, qb`` nodal
+    quaternions; ``d_n, d_dot_n, d_ddot_n``: the connector state at the last step.
+    Node blocks of f and K: (x_a, w_a, x_b, w_b).
+    """
+    Ra = np.empty((3, 3))
+    Rb = np.empty((3, 3))
+    Rrel = np.empty((3, 3))
+    quat_to_matrix(qa, Ra)
+    quat_to_matrix(qb, Rb)
+    for i in range(3):
+        for j in range(3):
+            Rrel[i, j] = Ra[0, i] * Rb[0, j] + Ra[1, i] * Rb[1, j] + Ra[2, i] * Rb[2, j]
+    theta = np.empty(3)
+    log_matrix(Rrel, theta, np.empty(4))
+    dx = xb - xa
+    rel = np.empty(3)
+    _mat_t_vec(Ra, dx, rel)
+    for i in range(3):
+        rel[i] -= dX[i]
+    tmp = np.empty(3)
+    _mat_t_vec(E0, rel, tmp)
+    d[:3] = tmp
+    _mat_t_vec(E0, theta, tmp)
+    d[3:] = tmp
+    s = np.empty(6)
+    for i in range(6):
+        d_dot[i] = c_d * (d[i] - d_n[i]) + c_v * d_dot_n[i] + c_a * d_ddot_n[i]
+        s[i] = k_diag[i] * (d[i] + alpha * d_dot[i])
+    # global force of the translational springs g = R_a E0 s_t, moment m = E0 s_r
+    g = np.empty(3)
+    m = np.empty(3)
+    _mat_vec(E0, s[:3], tmp)
+    _mat_vec(Ra, tmp, g)
+    _mat_vec(E0, s[3:], m)
+    Tinv = np.empty((3, 3))
+    ts_inv(theta, Tinv)
+    tm = np.empty(3)
+    _mat_t_vec(Tinv, m, tm)              # Ts^-T m
+    h = np.empty(3)
+    _mat_vec(Ra, tm, h)                  # moment on node b
+    for i in range(3):
+        f[i] = -g[i]
+        f[6 + i] = g[i]
+        f[9 + i] = h[i]
+        f[3 + i] = -h[i]
+    f[3] += g[1] * dx[2] - g[2] * dx[1]  # + g x dx on node a
+    f[4] += g[2] * dx[0] - g[0] * dx[2]
+    f[5] += g[0] * dx[1] - g[1] * dx[0]
+    _bushing_tangent(Ra, E0, Tinv, theta, dx, g, h, m, k_diag, 1.0 + alpha * c_d, K)
+
+
+@njit(cache=True)
+def _bushing_tangent(Ra, E0, Tinv, theta, dx, g, h, m, k_diag, rate_factor, K):
+    """K = B^T (1 + alpha c_d) K_eq14 B + geometric terms (see module docstring)."""
+    # B rows: d_t = P (dxb - dxa) - P S(dx)^T dwa ... with P = E0^T Ra^T;
+    #         d_r = Q (dwb - dwa), Q = E0^T Ts^-1 Ra^T
+    P = np.empty((3, 3))
+    Q = np.empty((3, 3))
+    W = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            P[i, j] = E0[0, i] * Ra[j, 0] + E0[1, i] * Ra[j, 1] + E0[2, i] * Ra[j, 2]
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                acc += E0[k, i] * (Tinv[k, 0] * Ra[j, 0] + Tinv[k, 1] * Ra[j, 1]
+                                   + Tinv[k, 2] * Ra[j, 2])
+            Q[i, j] = acc
+    Sdx = np.empty((3, 3))
+    skew(dx, Sdx)
+    PS = np.empty((3, 3))                # P S(dx): d_t = P (dxb - dxa) + P S(dx) dwa
+    for i in range(3):
+        for j in range(3):
+            PS[i, j] = P[i, 0] * Sdx[0, j] + P[i, 1] * Sdx[1, j] + P[i, 2] * Sdx[2, j]
+    B = np.zeros((6, 12))
+    for i in range(3):
+        for j in range(3):
+            B[i, j] = -P[i, j]
+            B[i, 3 + j] = PS[i, j]
+            B[i, 6 + j] = P[i, j]
+            B[3 + i, 3 + j] = -Q[i, j]
+            B[3 + i, 9 + j] = Q[i, j]
+    for i in range(12):
+        for j in range(12):
+            acc = 0.0
+            for a in range(6):
+                if B[a, i] != 0.0 and B[a, j] != 0.0:
+                    acc += B[a, i] * k_diag[a] * B[a, j]
+            K[i, j] = rate_factor * acc
+    # geometric terms of the translational springs
+    Sg = np.empty((3, 3))
+    skew(g, Sg)
+    for i in range(3):
+        for j in range(3):
+            K[6 + i, 3 + j] -= Sg[i, j]
+            K[i, 3 + j] += Sg[i, j]
+            K[3 + i, 6 + j] += Sg[i, j]
+            K[3 + i, j] -= Sg[i, j]
+            K[3 + i, 3 + j] += Sdx[i, 0] * Sg[0, j] + Sdx[i, 1] * Sg[1, j] + Sdx[i, 2] * Sg[2, j]
+    # geometric terms of the rotational springs: dh = -S(h) dwa + Ra Kh Ra^T (dwb - dwa)
+    Kh = np.empty((3, 3))
+    kh_matrix(theta, m, Tinv, np.empty((3, 3)), Kh)
+    for i in range(3):
+        for j in range(3):
+            W[i, j] = Kh[i, 0] * Ra[j, 0] + Kh[i, 1] * Ra[j, 1] + Kh[i, 2] * Ra[j, 2]
+    Sh = np.empty((3, 3))
+    skew(h, Sh)
+    for i in range(3):
+        for j in range(3):
+            G = Ra[i, 0] * W[0, j] + Ra[i, 1] * W[1, j] + Ra[i, 2] * W[2, j]
+            K[9 + i, 9 + j] += G
+            K[9 + i, 3 + j] -= G + Sh[i, j]
+            K[3 + i, 9 + j] -= G
+            K[3 + i, 3 + j] += G + Sh[i, j]
+
+
+@njit(cache=True)
+def truss_response(xa, xb, L0, EA, f, K):
+    """Co-rotational truss: axial force N = EA (l - L0)/L0 along e = (x_b - x_a)/l.
+
+    f = N (-e, e) on the translations of a and b; K = EA/L0 e e^T + N/l (I - e e^T)
+    in the (a, b) translational blocks (12-dof layout, rotations untouched).
+    Returns N.
+    """
+    e = xb - xa
+    length = np.sqrt(e[0] ** 2 + e[1] ** 2 + e[2] ** 2)
+    e /= length
+    N = EA * (length - L0) / L0
+    for i in range(12):
+        f[i] = 0.0
+        for j in range(12):
+            K[i, j] = 0.0
+    for i in range(3):
+        f[i] = -N * e[i]
+        f[6 + i] = N * e[i]
+        for j in range(3):
+            k = EA / L0 * e[i] * e[j] + N / length * ((1.0 if i == j else 0.0) - e[i] * e[j])
+            K[i, j] = k
+            K[6 + i, 6 + j] = k
+            K[i, 6 + j] = -k
+            K[6 + i, j] = -k
+    return N
+
+
+@njit(cache=True)
+def scatter_pair(a, b, fe, Ke, f, band, bw):
+    """Add a two-node vector and matrix to ``f`` and ``band`` (LAPACK band storage)."""
+    for i in range(12):
+        gi = NDOF_NODE * (a if i < 6 else b) + i % 6
+        f[gi] += fe[i]
+        for j in range(12):
+            if Ke[i, j] != 0.0:
+                gj = NDOF_NODE * (a if j < 6 else b) + j % 6
+                band[bw + gi - gj, gj] += Ke[i, j]
