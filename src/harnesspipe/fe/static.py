@@ -23,6 +23,14 @@ Convergence needs both the force norm ``|r| <= tol_force * ref`` and the energy 
 is the secant search on ``s(eta) = du . r(u + eta du)`` of Crisfield (1991, sec. 9.3).
 Between the requested output points (``stops``) the step is halved on failure and
 doubled again after quick convergence.
+
+Predictor (``extrapolate``): each increment starts from the converged state plus the
+previous increment's correction scaled to the new step (linear extrapolation of the
+path, Crisfield 1991, sec. 9.4.2); a failed extrapolated attempt is retried from the
+converged state before the step is cut.  The energy reference of an extrapolated
+increment is the larger of its first correction's and the previous increment's
+(scaled by the step ratio squared), so a good predictor does not tighten the test.
+The banded tangent is factorised by LAPACK ``dgbsv`` (partial pivoting) directly.
 """
 from __future__ import annotations
 
@@ -30,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
-from scipy.linalg import solve_banded
+from scipy.linalg import lapack
 
 
 class ConvergenceError(RuntimeError):
@@ -64,6 +72,7 @@ class NewtonSettings:
     quick: int = 4                 # iterations counted as quick convergence (step grows)
     min_fraction: float = 1.0 / 256  # smallest step, as a fraction of the stop spacing
     max_set_changes: int = 3       # repeats of an increment after active-set changes
+    extrapolate: bool = True       # predictor from the previous increment
 
 
 @njit(cache=True)
@@ -88,19 +97,53 @@ def band_matvec(band, x, bw, out):
                 out[i] += band[bw + i - j, j] * x[j]
 
 
+class _BandSolver:
+    """Solve K du = -r with K in LAPACK band storage, through ``dgbsv`` (work kept)."""
+
+    def __init__(self, bw: int, n: int):
+        self.bw = bw
+        self.ab = np.zeros((3 * bw + 1, n), order="F")  # bw extra rows for the LU fill-in
+
+    def __call__(self, band, r):
+        if self.ab.shape[1] != r.shape[0]:
+            self.ab = np.zeros((3 * self.bw + 1, r.shape[0]), order="F")
+        self.ab[self.bw:] = band
+        _, _, du, info = lapack.dgbsv(self.bw, self.bw, self.ab, -r,
+                                      overwrite_ab=True, overwrite_b=True)
+        if info != 0 or not np.all(np.isfinite(du)):
+            raise np.linalg.LinAlgError("singular tangent")
+        return du
+
+
 def newton(problem, lam: float, s: NewtonSettings) -> int:
     """Equilibrium at load factor ``lam`` from the last committed state; returns iterations."""
+    return _increment(problem, lam, s, None, 0.0, {})[0]
+
+
+def _increment(problem, lam, s, predictor, energy_ref, work):
+    """Newton iterations at ``lam`` from the committed state (+ ``predictor``).
+
+    ``work`` keeps the band solver and ``work["applied"]``, the total change of the
+    unknowns.  ``energy_ref`` is a lower bound of the energy reference.  Returns
+    (iterations, energy reference).
+    """
     problem.revert()
     problem.set_load(lam)
-    bw = problem.bandwidth
+    if predictor is not None:
+        problem.update(predictor)
     r, ref, band = problem.evaluate(True)
+    if "solver" not in work:
+        work["solver"] = _BandSolver(problem.bandwidth, r.shape[0])
+        work["applied"] = np.zeros(r.shape[0])
+    solver, applied = work["solver"], work["applied"]
+    applied[:] = 0.0 if predictor is None else predictor
     history = [np.linalg.norm(r) / ref]
     if history[0] <= s.tol_force:
-        return 0
+        return 0, energy_ref
     e0 = None
     for it in range(1, s.max_iter + 1):
         try:
-            du = solve_banded((bw, bw), band, -r, overwrite_ab=True, check_finite=False)
+            du = solver(band, r)
         except np.linalg.LinAlgError:  # singular tangent: lost support or collapse
             raise _NotConverged(history) from None
         s0 = du @ r
@@ -110,15 +153,16 @@ def newton(problem, lam: float, s: NewtonSettings) -> int:
         if s.line_search and abs(du @ r_new) > s.ls_ratio * abs(s0):
             eta = _line_search(problem, du, s0, du @ r_new, s)
             r_new, ref, band = problem.evaluate(True)
+        applied += eta * du
         energy = abs(eta * s0)
-        e0 = energy if e0 is None else e0
+        e0 = max(energy, energy_ref) if e0 is None else e0
         r = r_new
         rel = np.linalg.norm(r) / ref
         history.append(rel)
         if not np.isfinite(rel) or rel > 1.0e8:
             raise _NotConverged(history)
         if rel <= s.tol_force and energy <= s.tol_energy * max(e0, 1e-300):
-            return it
+            return it, e0
     raise _NotConverged(history)
 
 
@@ -153,16 +197,28 @@ def follow_path(problem, stops, settings: NewtonSettings = NewtonSettings(), on_
     step = spacing
     lam = 0.0
     increment = 0
+    work = {}
+    last = None              # (previous increment's change of the unknowns, its step, energy)
     for target in stops:
         while lam < target - 1e-12 * spacing:
             trial = min(lam + step, target)
             increment += 1
+            predictor, e_ref = None, 0.0
+            if settings.extrapolate and last is not None:
+                ratio = (trial - lam) / last[1]
+                predictor, e_ref = ratio * last[0], ratio * ratio * last[2]
             try:
-                iterations = newton(problem, trial, settings)
+                try:
+                    iterations, e0 = _increment(problem, trial, settings, predictor, e_ref, work)
+                except _NotConverged:
+                    if predictor is None:
+                        raise
+                    predictor, e_ref = None, 0.0      # retry from the converged state
+                    iterations, e0 = _increment(problem, trial, settings, None, 0.0, work)
                 for _ in range(settings.max_set_changes):
                     if getattr(problem, "accept", lambda: True)():
                         break
-                    iterations = newton(problem, trial, settings)
+                    iterations, e0 = _increment(problem, trial, settings, predictor, e_ref, work)
             except _NotConverged as exc:
                 problem.revert()
                 step = 0.5 * (trial - lam)
@@ -171,6 +227,7 @@ def follow_path(problem, stops, settings: NewtonSettings = NewtonSettings(), on_
                                            problem.describe(lam)) from None
                 continue
             problem.commit()
+            last = (work["applied"].copy(), trial - lam, e0)
             if iterations <= settings.quick:
                 step = min(2.0 * step, spacing)
             lam = trial
