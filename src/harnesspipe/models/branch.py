@@ -292,10 +292,12 @@ class YHarness:
         return self.f, self.band
 
     # -- results ---------------------------------------------------------------------
-    def crosshead_reaction(self) -> np.ndarray:
-        """Force the crosshead applies to the strand (internal force at its node)."""
-        h = self.layout.head
-        return self.f[NDOF_NODE * h:NDOF_NODE * h + 3].copy()
+    def crosshead_reaction(self) -> float:
+        """Force the crosshead applies to the strand, along the strand (what the load cell reads)."""
+        tip, head = self.layout.tip, self.layout.head
+        x = self.X + self.u
+        e = (x[head] - x[tip]) / np.linalg.norm(x[head] - x[tip])
+        return float(self.f[NDOF_NODE * head:NDOF_NODE * head + 3] @ e)
 
     def s2_shape(self) -> np.ndarray:
         """Deformed S2 centre line, from the joint end of its CWB to the tip."""
@@ -325,15 +327,18 @@ def run(load_case: str = "inplane", alpha: float = 0.2, properties: dict | None 
     model = YHarness(layout, props, alpha, lambda t: rate * t * direction, mesh)
     duration = stroke / rate
     shape_times = [s / rate for s in shape_at if 0.0 < s <= stroke]
-    times = np.unique(np.concatenate((time_grid(duration, n_steps, dt_min), shape_times)))
+    grid = time_grid(duration, n_steps, dt_min)
+    extra = [t for t in shape_times if np.min(np.abs(grid - t)) > 1e-6 * duration]
+    times = np.sort(np.concatenate((grid, extra)))
     rows = [(0.0, 0.0, 0.0, 0.0)]
     shapes = {0.0: model.s2_shape()} if 0.0 in shape_at else {}
 
     def record(t):
         travel = float((model.X[layout.head] + model.u[layout.head] - head0) @ direction)
-        rows.append((t, travel, model.tension, float(np.linalg.norm(model.crosshead_reaction()))))
-        if any(abs(t - ts) < 1e-9 * duration for ts in shape_times):
-            shapes[round(t * rate, 9)] = model.s2_shape()
+        rows.append((t, travel, model.tension, model.crosshead_reaction()))
+        for ts in shape_times:
+            if abs(t - ts) <= 1e-6 * duration:
+                shapes[round(ts * rate, 9)] = model.s2_shape()
 
     iterations = integrate(model, times, settings, record, length_scale=stroke,
                            force_floor=1e-9 * STRAND_EA / H)

@@ -1,0 +1,82 @@
+"""Y-harness ROM (Sec. 5): connector in the beam system, strand force, alpha effect, alpha fit."""
+import argparse
+import math
+
+import numpy as np
+import pytest
+
+from harnesspipe.calibrate.branch import fit_alpha
+from harnesspipe.cli import InputError
+from harnesspipe.commands.branch import add_branch_parser
+from harnesspipe.fe.connector import bushing_stiffness
+from harnesspipe.fe.newmark_band import integrate, time_grid
+from harnesspipe.models import branch
+
+COARSE = dict(n_steps=30, mesh=branch.BranchMesh(element_size=30.0, n_rings=2, n_sectors=6))
+
+
+@pytest.fixture(scope="module")
+def curves():
+    """Coarse in-plane runs at alpha 0.2 and 0 (the same resolution for data and fits)."""
+    return {a: branch.run("inplane", a, **COARSE).curve for a in (0.2, 0.0)}
+
+
+def test_connector_adds_compliance_one_over_k():
+    """Two collinear beams joined by a bushing, pulled axially through the strand:
+    the tension is delta / (H/EA_strand + 2 L/(EA) + 1/k) with k of eq. 14."""
+    props = {"E": 18.7, "radius": 7.05}          # elastic beams
+    twb = {"E": 147.6, "radius": 3.6}
+    L, l_twb, delta = 50.0, 30.0, 0.05
+    X = np.array([[0.0, 0, 0], [L, 0, 0], [L + l_twb, 0, 0], [2 * L + l_twb, 0, 0],
+                  [2 * L + l_twb + branch.H, 0, 0]])
+    cwb, tb = "cwb19_t2_open_coarse", "twb19_t2"
+    layout = branch.Layout(X, [(cwb, np.array([[0, 1]])), (cwb, np.array([[2, 3]]))],
+                           [(tb, l_twb, 1, 2)], np.arange(4), [0], 3, 4)
+    duration = 100.0
+    model = branch.YHarness(layout, {cwb: props, tb: twb}, 0.0,
+                            lambda t: np.array([delta * t / duration, 0.0, 0.0]),
+                            branch.BranchMesh(n_rings=2, n_sectors=6))
+    integrate(model, time_grid(duration, 10, duration / 10), branch.SETTINGS)
+    k = bushing_stiffness(twb["E"], twb["E"] / (2 * 1.39), twb["radius"], l_twb)[0]
+    EA = props["E"] * math.pi * props["radius"] ** 2
+    compliance = branch.H / branch.STRAND_EA + 2 * L / EA + 1.0 / k
+    assert model.tension == pytest.approx(delta / compliance, rel=1e-6)
+
+
+def test_strand_tension_equals_crosshead_reaction(curves):
+    c = curves[0.2]
+    np.testing.assert_allclose(c["force_N"], c["reaction_N"], rtol=1e-9, atol=1e-15)
+
+
+def test_elastic_joint_differs_early_by_the_kelvin_voigt_lag(curves):
+    """A Kelvin-Voigt joint (eq. 15) in series with undamped beams, pulled at rate v, lags
+    its elastic response by at most alpha v in displacement: 0 < F_0.2(u) - F_0(u) <=
+    F_0(u + alpha v) - F_0(u).  The difference is visible (> 1 %) for u < 10 mm."""
+    u = np.linspace(1.0, 10.0, 10)
+    F02 = np.interp(u, curves[0.2]["displacement_mm"], curves[0.2]["force_N"])
+    c0 = curves[0.0]
+    F0 = np.interp(u, c0["displacement_mm"], c0["force_N"])
+    lag = np.interp(u + 0.2 * 1.0, c0["displacement_mm"], c0["force_N"]) - F0
+    assert np.all(F02 - F0 > 0.0)
+    assert np.all(F02 - F0 <= lag)
+    assert np.all((F02 - F0) / F0 > 0.01)
+
+
+def test_alpha_recovered_from_noise_free_curve(curves):
+    c = curves[0.2]
+    fit = fit_alpha(c["displacement_mm"].to_numpy(), c["force_N"].to_numpy(),
+                    bounds=(0.0, 1.0), xatol=1e-4, **COARSE)
+    assert fit["alpha"] == pytest.approx(0.2, rel=0.02)
+    assert list(fit["trace"].columns) == ["alpha", "error_l2", "wall_s"]
+    assert fit["nfev"] == len(fit["trace"])
+
+
+def test_cli_rejects_bad_options(tmp_path):
+    parser = argparse.ArgumentParser()
+    add_branch_parser(parser.add_subparsers(dest="rom_command"))
+    for argv, message in ((["--load-case", "sideways"], "--load-case 'sideways'"),
+                          (["--load-case", "inplane", "--alpha", "-1"], "--alpha '-1'")):
+        args = parser.parse_args(["branch", *argv, "--out", str(tmp_path / "f.csv")])
+        with pytest.raises(InputError, match=message):
+            args.func(args)
+    assert not (tmp_path / "f.csv").exists()
