@@ -37,6 +37,15 @@ fraction N (r_w / r)^2 of the effective circular section (tube and tape neglecte
 rotary inertia rho I_p l / 2 per node about every axis.  The branch point is massless.
 
 The force is the strand tension (the load cell is in line with the strand).
+
+Size of the alpha effect.  Under a constant pull rate v the Kelvin-Voigt joint carries a
+steady viscous force, so the curve with alpha > 0 lies above the elastic-joint curve by
+about the force of a travel alpha v times the joint's share of the compliance (at most
+alpha v: 0.2 mm at 1 mm/s).  With the default properties that is +0.18 mN throughout,
+i.e. +17 % at 1 mm, +3 % at 5 mm, +1.7 % at 10 mm, +0.3 % at 50 mm (bench/RESULTS.md):
+visible early, small later.  A mismatch up to u = 10 mm as in the paper's Fig. 18a needs
+alpha v ~ 10 mm, i.e. the 50 mm pulled in about 1 s of analysis time (then the offset is
+~17 % at 50 mm and the start is dominated by inertia), or alpha ~ 10 s at 1 mm/s.
 """
 from __future__ import annotations
 
