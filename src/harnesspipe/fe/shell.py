@@ -233,8 +233,9 @@ def element_force(x, d, Jinv, dV, shear_ref, h0, h, mat, state_old, state_new, f
         gi_t[p] = 0.0
         gz_t[p] = 0.0
         for a in range(4):
-            gi_t[p] += dN[a, col] * x[a]
-            gz_t[p] += N[a] * 0.5 * h0 * d[a]
+            for i in range(3):
+                gi_t[p, i] += dN[a, col] * x[a, i]
+                gz_t[p, i] += N[a] * 0.5 * h0 * d[a, i]
         gam[p] = np.dot(gi_t[p], gz_t[p]) - shear_ref[p]
     for gp in range(4):
         xi, eta = XI_GP[gp, 0], XI_GP[gp, 1]
@@ -317,11 +318,16 @@ def _drill_strains(x, d, r, Jc, omega, f0, f1, t, w43):
             f0[i] += dxi * Jc[0, 0] + deta * Jc[1, 0]
             f1[i] += dxi * Jc[0, 1] + deta * Jc[1, 1]
     normal, p, rp = w43[0], w43[1], w43[2]
-    normal[:] = d[0] + d[1] + d[2] + d[3]
+    for i in range(3):
+        normal[i] = d[0, i] + d[1, i] + d[2, i] + d[3, i]
     c1_len = np.sqrt(np.sum(f0 ** 2))
     _cross(normal, f0, t)                       # in-plane, normal to c1 = f0/|f0|
-    t -= np.dot(t, f0) / (c1_len * c1_len) * f0
-    t /= np.sqrt(np.sum(t ** 2))
+    t_dot = np.dot(t, f0) / (c1_len * c1_len)
+    for i in range(3):
+        t[i] -= t_dot * f0[i]
+    t_len = np.sqrt(t[0] ** 2 + t[1] ** 2 + t[2] ** 2)
+    for i in range(3):
+        t[i] /= t_len
     alpha = np.arctan2(-np.dot(f0, f1) / c1_len, c1_len + np.dot(t, f1))
     ca, sa = np.cos(alpha), np.sin(alpha)
     for i in range(3):
@@ -332,7 +338,8 @@ def _drill_strains(x, d, r, Jc, omega, f0, f1, t, w43):
 
 
 @njit(cache=True)
-def drilling(x, d, r, Jc, k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, rp, w3a, w3b, w3c, w43):
+def drilling(x, d, r, Jc, k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, rp, axis, w3a, w3b, w3c,
+             w43):
     """Drilling penalty 1/2 k_d sum omega_a^2: adds its force to ``fe`` (4, 6) and its
     Gauss-Newton tangent k_d grad^T grad to ``ke`` (24, 24); grad = d omega/dq by
     central differences (the neglected omega d2(omega) term vanishes with omega)."""
@@ -341,7 +348,6 @@ def drilling(x, d, r, Jc, k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, rp, w3a,
         for i in range(3):
             scale = max(scale, abs(x[a, i] - x[0, i]))
     hu = FD_STEP * scale
-    axis = np.zeros(3)
     _drill_strains(x, d, r, Jc, omega, w3a, w3b, w3c, w43)
     for j in range(24):
         a, c = j // 6, j % 6
@@ -440,7 +446,7 @@ def _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, 
     element_tangent(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, state_old[e], scratch, act,
                     ke, fp, fm, xp, dp, axis, work)
     k_d = DRILL_FACTOR * mat[0] / (2.0 * (1.0 + mat[1])) * h0 * area[e]
-    drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_,
+    drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_, axis,
              w3a, w3b, w3c, w43)
 
 
@@ -479,7 +485,7 @@ def internal_force(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat,
         element_force(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, state_old[e],
                       state_new[e], fe, work)
         k_d = DRILL_FACTOR * mat[0] / (2.0 * (1.0 + mat[1])) * h0 * area[e]
-        drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_,
+        drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_, axis,
                  w3a, w3b, w3c, w43)
         for a in range(4):
             for i in range(6):
