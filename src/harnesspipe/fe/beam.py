@@ -32,6 +32,7 @@ from harnesspipe.fe.rotation import kh_matrix, log_matrix, quat_to_matrix, skew,
 NDOF_NODE = 6
 NDOF_ELEM = 12
 BANDWIDTH = 2 * NDOF_NODE - 1  # half bandwidth of a chain of two-node elements
+STRAIN_DOFS = ((0, 0), (2, 5), (3, 6))  # local dofs of e0 (u; 2nd coefficient 0), kappa_y, kappa_z
 
 
 def lobatto_points(n_gauss: int = 3):
@@ -51,17 +52,14 @@ def lobatto_points(n_gauss: int = 3):
 
 def initial_frames(X, conn, up=(0.0, 1.0, 0.0)):
     """Initial element frames R0 (columns e1 along the chord, e2 near ``up``)."""
-    up = np.asarray(up, dtype=float)
-    R0 = np.empty((conn.shape[0], 3, 3))
-    for e, (a, b) in enumerate(conn):
-        e1 = X[b] - X[a]
-        e1 /= np.linalg.norm(e1)
-        e3 = np.cross(e1, up)
-        if np.linalg.norm(e3) < 1e-8:
-            e3 = np.cross(e1, [0.0, 0.0, 1.0])
-        e3 /= np.linalg.norm(e3)
-        R0[e] = np.column_stack((e1, np.cross(e3, e1), e3))
-    return R0
+    up = np.broadcast_to(np.asarray(up, dtype=float), (conn.shape[0], 3))
+    e1 = X[conn[:, 1]] - X[conn[:, 0]]
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
+    e3 = np.cross(e1, up)
+    along = np.linalg.norm(e3, axis=1) < 1e-8          # chord along ``up``: use z instead
+    e3[along] = np.cross(e1[along], [0.0, 0.0, 1.0])
+    e3 /= np.linalg.norm(e3, axis=1)[:, None]
+    return np.stack((e1, np.cross(e3, e1), e3), axis=2)
 
 
 @njit(cache=True)
@@ -121,35 +119,37 @@ def local_bernoulli(u, th1, th2, l0, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n
 
     Generalised strains at xi: e0 = u/l0, kappa_y = ((6xi-4) th1_y + (6xi-2) th2_y)/l0,
     kappa_z likewise with the z rotations; torsion elastic, GJ (th2_x - th1_x)/l0.
+    ``B`` (3x7) is work: ``B[a, :2]`` holds the nonzero coefficients of strain a at
+    the local dofs ``STRAIN_DOFS[a]``, so fl = int B^T s and Kl = int B^T D B touch
+    only the nonzero entries.
     """
     for i in range(7):
         fl[i] = 0.0
         for j in range(7):
             Kl[i, j] = 0.0
-            if i < 3:
-                B[i, j] = 0.0
-    B[0, 0] = 1.0 / l0
+    e0 = u / l0
     for g in range(xi_g.shape[0]):
         xi = xi_g[g]
         b1 = (6.0 * xi - 4.0) / l0
         b2 = (6.0 * xi - 2.0) / l0
-        B[1, 2] = b1
-        B[1, 5] = b2
-        B[2, 3] = b1
-        B[2, 6] = b2
-        e0 = u / l0
         ky = b1 * th1[1] + b2 * th2[1]
         kz = b1 * th1[2] + b2 * th2[2]
         section_response(e0, ky, kz, y, z, area, eps_p_old[g], alpha_old[g],
                          eps_p_new[g], alpha_new[g], E, sigma_y, K, n, elastic, s, D)
         wl = w_g[g] * l0
-        for i in range(7):
-            for a in range(3):
-                if B[a, i] != 0.0:
-                    fl[i] += wl * B[a, i] * s[a]
-                    for b in range(3):
-                        for j in range(7):
-                            Kl[i, j] += wl * B[a, i] * D[a, b] * B[b, j]
+        B[0, 0] = 1.0 / l0      # nonzero coefficients of B, at the dofs STRAIN_DOFS
+        B[0, 1] = 0.0
+        B[1, 0] = B[2, 0] = b1
+        B[1, 1] = B[2, 1] = b2
+        for a in range(3):
+            for p in range(2):
+                i = STRAIN_DOFS[a][p]
+                ca = wl * B[a, p]
+                fl[i] += ca * s[a]
+                for b in range(3):
+                    cab = ca * D[a, b]
+                    for q in range(2):
+                        Kl[i, STRAIN_DOFS[b][q]] += cab * B[b, q]
     kt = GJ / l0
     torque = kt * (th2[0] - th1[0])
     fl[1] -= torque

@@ -137,7 +137,7 @@ def _increment(problem, lam, s, predictor, energy_ref, work):
         work["applied"] = np.zeros(r.shape[0])
     solver, applied = work["solver"], work["applied"]
     applied[:] = 0.0 if predictor is None else predictor
-    history = [np.linalg.norm(r) / ref]
+    history = [np.sqrt(r @ r) / ref]
     if history[0] <= s.tol_force:
         return 0, energy_ref
     e0 = None
@@ -157,7 +157,7 @@ def _increment(problem, lam, s, predictor, energy_ref, work):
         energy = abs(eta * s0)
         e0 = max(energy, energy_ref) if e0 is None else e0
         r = r_new
-        rel = np.linalg.norm(r) / ref
+        rel = np.sqrt(r @ r) / ref
         history.append(rel)
         if not np.isfinite(rel) or rel > 1.0e8:
             raise _NotConverged(history)

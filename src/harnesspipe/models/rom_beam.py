@@ -187,7 +187,7 @@ class BeamSystem:
                        self.y, self.z, self.area, self.GJ, m.E, m.sigma_y, m.K, m.n, m.elastic,
                        self.hist[0], self.hist[1], self.hist_trial[0], self.hist_trial[1],
                        want_tangent, self.f, self.band, self.bandwidth)
-        ref = np.linalg.norm(self.f)
+        ref = np.sqrt(self.f @ self.f)
         if self.cylinders is not None:
             c = self.cylinders
             last = self._committed
@@ -197,12 +197,12 @@ class BeamSystem:
                              c.mu, self.k_n, self.ft, self.ft_trial, want_tangent, self.f,
                              self.band, self.bandwidth, self.cyl_reactions, self.pressures,
                              self.status, self.xis)
-            ref = max(ref, np.linalg.norm(self.cyl_reactions))
+            ref = max(ref, np.sqrt(np.sum(self.cyl_reactions ** 2)))
         r = self.f - self.lam * self.load
         self.reaction_dofs[:] = r[self.fixed]
         if want_tangent and self.pending.any():  # linear predictor of the prescribed step
             band_matvec(self.band, self.pending, self.bandwidth, r)
-        ref = max(ref, self.lam * np.linalg.norm(self.load), self.force_floor)
+        ref = max(ref, self.lam * np.sqrt(self.load @ self.load), self.force_floor)
         constrain_band(self.band, r, self.fixed, self.bandwidth)
         return r, ref, self.band
 
