@@ -31,6 +31,9 @@ converged state before the step is cut.  The energy reference of an extrapolated
 increment is the larger of its first correction's and the previous increment's
 (scaled by the step ratio squared), so a good predictor does not tighten the test.
 The banded tangent is factorised by LAPACK ``dgbsv`` (partial pivoting) directly.
+A correction whose energy already passes the test is expected to be the last one:
+its residual is evaluated without the tangent (which would go unused), and the
+tangent is evaluated after all only if the force test then fails.
 """
 from __future__ import annotations
 
@@ -147,12 +150,16 @@ def _increment(problem, lam, s, predictor, energy_ref, work):
         except np.linalg.LinAlgError:  # singular tangent: lost support or collapse
             raise _NotConverged(history) from None
         s0 = du @ r
+        # the energy test of this correction is known before the residual: when it
+        # passes, the increment is expected to converge here and the tangent is skipped
+        likely_last = e0 is not None and abs(s0) <= s.tol_energy * e0
         problem.update(du)
-        r_new, ref, band = problem.evaluate(True)
+        r_new, ref, band = problem.evaluate(not likely_last)
         eta = 1.0
         if s.line_search and abs(du @ r_new) > s.ls_ratio * abs(s0):
             eta = _line_search(problem, du, s0, du @ r_new, s)
             r_new, ref, band = problem.evaluate(True)
+            likely_last = False
         applied += eta * du
         energy = abs(eta * s0)
         e0 = max(energy, energy_ref) if e0 is None else e0
@@ -163,6 +170,8 @@ def _increment(problem, lam, s, predictor, energy_ref, work):
             raise _NotConverged(history)
         if rel <= s.tol_force and energy <= s.tol_energy * max(e0, 1e-300):
             return it, e0
+        if likely_last:  # not converged after all: the tangent is needed
+            r, ref, band = problem.evaluate(True)
     raise _NotConverged(history)
 
 
