@@ -21,17 +21,19 @@ HP = f'"{PY}" -m harnesspipe'
 DATA = config["data_dir"]
 RES = "results"
 PROFILE = hp_config.resolution(config)
-FITS = {}  # stage -> fit.json paths; each stage rule file adds its own
+FITS = {}     # stage -> fit.json paths; each stage rule file adds its own
+TARGETS = []  # summary tables; each stage rule file adds its own
 
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/data.smk"
 include: "workflow/rules/rom.smk"
+include: "workflow/rules/branch.smk"
 include: "workflow/rules/report.smk"
 
 
 rule all:
     input:
-        f"{RES}/rom/table3.csv",
+        TARGETS,
         f"{RES}/report/index.html",
     default_target: True

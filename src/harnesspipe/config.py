@@ -73,6 +73,10 @@ def _check_semantics(cfg: dict, source: str) -> None:
         c = cfg["coverings"][name]
         if c["d_i"] >= c["d_o"]:
             raise ConfigError(f"{source}: coverings.{name}.d_i: {c['d_i']} must be < d_o {c['d_o']}")
+    e0, e1, e2 = cfg["rom"]["reference_strains"]
+    if not (e0 < e1 < e2 and abs(e1 * e1 - e0 * e2) <= 1e-9 * e1 * e1):
+        raise ConfigError(f"{source}: rom.reference_strains: {e0}, {e1}, {e2} must increase "
+                          "in geometric progression")
     if cfg["interfaces"]["mu_k"] > cfg["interfaces"]["mu_s"]:
         raise ConfigError(f"{source}: interfaces.mu_k: {cfg['interfaces']['mu_k']} must be <= mu_s")
 

@@ -9,10 +9,12 @@ def rom_settings(case):
     return json.dumps({
         "r_o": config["cases"][case]["r_o"],
         "supports": config["rom"]["supports"],
+        "mu": config["rom"]["roller_friction"],
         "reference": config["rom"]["reference"],
         "three_point": {k: tp[k] for k in ("span", "overhang", "deflection")},
-        "rom": {k: config["rom"][k] for k in ("linear_window", "yield_deflection",
-                                              "simplex_parameters", "simplex", "initial_guess")},
+        "rom": {k: config["rom"][k] for k in ("model_consistent_E", "linear_window", "yield_deflection",
+                                              "simplex_parameters", "simplex_space", "reference_strains",
+                                        "simplex", "initial_guess")},
         "mesh": PROFILE["rom"],
         "maxfev": PROFILE["simplex_maxfev"],
     }, sort_keys=True)
@@ -35,7 +37,9 @@ rule rom_fit:
         f"{RES}/logs/rom_fit_{{case}}.log",
     params:
         settings=lambda wc: rom_settings(wc.case),
-        code=source_hash("fe", "models", "rom.py", "calibrate", "stages/rom.py"),
+        code=source_hash("fe", "models/rom_beam.py", "rom.py", "calibrate/rom.py", "calibrate/eq13.py",
+                         "calibrate/simplex.py", "calibrate/objective.py", "stages/rom.py",
+                         "stages/common.py"),
     threads: 1
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage rom-fit --case {wildcards.case} --reference {input[0]} "
@@ -56,4 +60,6 @@ rule table3:
         "{HP} stage table3 --fits {input} --out {output} > {log} 2>&1"
 
 
-FITS["rom"] = [f"{RES}/rom/{c}/fit.json" for c in ROM_CASES]
+if ROM_CASES:
+    FITS["rom"] = [f"{RES}/rom/{c}/fit.json" for c in ROM_CASES]
+    TARGETS.append(f"{RES}/rom/table3.csv")

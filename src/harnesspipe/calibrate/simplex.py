@@ -15,7 +15,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pandas as pd
-from scipy.optimize import minimize
+from scipy.optimize import minimize, minimize_scalar
 
 SIMPLEX_STEP = 0.05  # Sec. 3.2: "adding 5% of each component"
 
@@ -106,13 +106,21 @@ class EvaluationLog:
 
 
 def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
-                log_path=None, key="", step=SIMPLEX_STEP) -> FitResult:
+                log_path=None, key="", restarts=0, start_scaling=None,
+                step=SIMPLEX_STEP) -> FitResult:
     """Minimise ``objective(x) -> float`` by Nelder-Mead from the paper's simplex.
 
     ``xatol`` is relative to ``x0`` (the search runs on x / x0, so parameters of
     very different magnitude -- E in MPa and n -- get the same resolution);
     ``fatol`` is absolute on the error.  A non-finite error is a rejected point:
     it is logged and replaced by ``inf`` so the simplex moves away from it.
+    ``restarts``: after a run ends, start again from its best point with a fresh
+    +5 % simplex (a collapsed simplex is a known failure of Nelder-Mead in narrow
+    valleys) while the budget ``maxfev`` lasts and a restart still improves by
+    more than ``fatol``.
+    ``start_scaling=(lo, hi)``: before the simplex, a bounded 1-D search for the
+    factor c in [lo, hi] minimising objective(c x0) moves the start to c x0 (its
+    evaluations are logged like all others).
     ``key`` identifies the objective (e.g. a hash of its data and settings): a log
     written under another key is discarded instead of replayed.
     """
@@ -131,10 +139,23 @@ def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
         log.append(x, err, time.perf_counter() - t0)
         return err if np.isfinite(err) else np.inf
 
-    z_simplex = initial_simplex(x0, step) / scale
-    res = minimize(wrapped, x0 / scale, method="Nelder-Mead",
-                   options={"initial_simplex": z_simplex, "xatol": xatol, "fatol": fatol,
-                            "maxfev": maxfev, "adaptive": False})
-    return FitResult(names=list(names), x=res.x * scale, fun=float(res.fun),
-                     nfev=len(log.rows), converged=bool(res.success),
-                     message=str(res.message), trace=log.frame())
+    z, best, converged, message = x0 / scale, np.inf, False, ""
+    if start_scaling is not None:
+        line = minimize_scalar(lambda c: wrapped(c * z), bounds=start_scaling, method="bounded",
+                               options={"xatol": 1e-3})
+        z = line.x * z
+    for _ in range(restarts + 1):
+        budget = maxfev - len(log.rows)
+        if budget < len(x0) + 2:
+            break
+        res = minimize(wrapped, z, method="Nelder-Mead",
+                       options={"initial_simplex": initial_simplex(z * scale, step) / scale,
+                                "xatol": xatol, "fatol": fatol, "maxfev": budget, "adaptive": False})
+        improved = best - float(res.fun)
+        if res.fun < best:
+            z, best = res.x, float(res.fun)
+        converged, message = bool(res.success), str(res.message)
+        if improved <= fatol:
+            break
+    return FitResult(names=list(names), x=z * scale, fun=best, nfev=len(log.rows),
+                     converged=converged, message=message, trace=log.frame())

@@ -32,7 +32,7 @@ def _check_data(args) -> int:
 
 
 def _synthesize(args) -> int:
-    from harnesspipe.data import generators  # noqa: F401  (registers the generators)
+    from harnesspipe.data import generators, generators_branch  # noqa: F401  (register generators)
     from harnesspipe.data.synthesize import synthesize
     cfg = cfgmod.load(args.config)
     out = synthesize(cfg, args.out, args.only)

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from harnesspipe.commands.branch import add_branch_parser
+
 
 def _number(text: str, *, strict: bool) -> float:
     import argparse
@@ -56,6 +58,8 @@ def register(sub) -> None:
                    help="CSV: load_N,tip_ux_mm,tip_uy_mm,tip_rotation_rad")
     p.set_defaults(func=_cantilever)
 
+    add_branch_parser(rsub)
+
 
 def _plastic_args(args) -> dict:
     from harnesspipe.cli import InputError
@@ -73,6 +77,9 @@ def _mesh(args) -> dict:
         return {}
     if args.elements < 2:
         raise InputError(f"rom {args.rom_command}: --elements {args.elements}: need at least 2")
+    if args.rom_command == "three-point" and args.elements % 2:
+        raise InputError(f"rom three-point: --elements {args.elements}: must be even "
+                         "(a node at mid-span under the loading pin)")
     return {"n_elements": args.elements}
 
 
@@ -87,16 +94,24 @@ def _write(frame, out: Path) -> int:
 
 def _three_point(args) -> int:
     from harnesspipe import rom
-    plastic = _plastic_args(args)
-    frame = rom.three_point(E=args.E, radius=args.radius, supports=args.supports, span=args.span,
-                            overhang=args.overhang, deflection=args.deflection,
-                            elastic=args.elastic, **plastic, **_mesh(args))
+    from harnesspipe.cli import InputError
+    plastic, mesh = _plastic_args(args), _mesh(args)
+    try:
+        frame = rom.three_point(E=args.E, radius=args.radius, supports=args.supports, span=args.span,
+                                overhang=args.overhang, deflection=args.deflection,
+                                elastic=args.elastic, **plastic, **mesh)
+    except ValueError as exc:  # the model's own input checks
+        raise InputError(f"rom three-point: {exc}") from None
     return _write(frame, args.out)
 
 
 def _cantilever(args) -> int:
     from harnesspipe import rom
-    plastic = _plastic_args(args)
-    frame = rom.cantilever(E=args.E, radius=args.radius, length=args.length,
-                           tip_load=args.tip_load, elastic=args.elastic, **plastic, **_mesh(args))
+    from harnesspipe.cli import InputError
+    plastic, mesh = _plastic_args(args), _mesh(args)
+    try:
+        frame = rom.cantilever(E=args.E, radius=args.radius, length=args.length,
+                               tip_load=args.tip_load, elastic=args.elastic, **plastic, **mesh)
+    except ValueError as exc:
+        raise InputError(f"rom cantilever: {exc}") from None
     return _write(frame, args.out)

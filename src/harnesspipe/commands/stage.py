@@ -34,6 +34,25 @@ def register(sub) -> None:
     p.add_argument("--outdir", type=Path, required=True)
     p.set_defaults(func=_rom_fit)
 
+    p = ssub.add_parser("branch-fit", help="calibrate the joint damping alpha (Sec. 5, eq. 15)")
+    p.add_argument("--reference", type=Path, required=True, help="prepared in-plane test (HDF5)")
+    p.add_argument("--settings", type=_settings, required=True)
+    p.add_argument("--outdir", type=Path, required=True)
+    p.add_argument("--damping", type=Path, required=True, help="damping.csv to write")
+    p.set_defaults(func=_branch_fit)
+
+    p = ssub.add_parser("branch-predict", help="Y-harness ROM against a test, no refit")
+    p.add_argument("--reference", type=Path, required=True)
+    p.add_argument("--settings", type=_settings, required=True)
+    p.add_argument("--outdir", type=Path, required=True)
+    p.add_argument("--load-case", choices=("inplane", "outofplane"), required=True)
+    group = p.add_mutually_exclusive_group(required=True)
+    group.add_argument("--alpha", type=float, help="damping coefficient [s]")
+    group.add_argument("--damping", type=Path, help="damping.csv with the calibrated alpha")
+    p.add_argument("--item", required=True, help="title of the prediction in the report")
+    p.add_argument("--role", default="validation")
+    p.set_defaults(func=_branch_predict)
+
     p = ssub.add_parser("table3", help="collect ROM fits into table3.csv")
     p.add_argument("--fits", type=Path, nargs="+", required=True)
     p.add_argument("--out", type=Path, required=True)
@@ -50,6 +69,20 @@ def _warmup(args) -> int:
 def _rom_fit(args) -> int:
     from harnesspipe.stages.rom import fit_case
     fit = fit_case(args.case, args.reference, args.settings, args.outdir)
+    print(json.dumps(fit, indent=2))
+    return 0
+
+
+def _branch_fit(args) -> int:
+    from harnesspipe.stages.branch import calibrate
+    print(json.dumps(calibrate(args.reference, args.settings, args.outdir, args.damping), indent=2))
+    return 0
+
+
+def _branch_predict(args) -> int:
+    from harnesspipe.stages.branch import predict, read_alpha
+    alpha = args.alpha if args.alpha is not None else read_alpha(args.damping)
+    fit = predict(args.reference, args.settings, args.outdir, args.load_case, alpha, args.item, args.role)
     print(json.dumps(fit, indent=2))
     return 0
 

@@ -1,7 +1,8 @@
 """Generator of the synthetic branch pull tests (Sec. 2.3, 5; DESIGN sec. 4).
 
-Truth: the Y-harness ROM (:mod:`harnesspipe.models.branch`) at alpha = 0.2 with its
-documented default beam properties; only alpha varies from sample to sample.
+Truth: the Y-harness ROM (:mod:`harnesspipe.models.branch`) at the paper's alpha
+(config ``paper.damping.alpha``, 0.2) with the beam properties and protocol of the
+config's ``branch`` section; only alpha varies from sample to sample.
 Markers: the bent shape of S2 at a few crosshead travels, sampled evenly along its
 arc length (rows: displacement, marker index, x, y).  For the out-of-plane case
 (Fig. 20) the pull is along z, so the marker ``y`` column holds the out-of-plane
@@ -13,10 +14,8 @@ import numpy as np
 
 from harnesspipe.data.synthesize import Curve, TestSpec, register
 
-STROKE, RATE, LOAD_CELL = 50.0, 1.0, 8.9          # Sec. 2.3
 MARKERS = 9
 MARKER_DISPLACEMENTS = (10.0, 25.0, 50.0)
-ALPHA = 0.2                                       # Sec. 5, eq. 15
 
 
 def s2_marker_rows(shapes: dict, load_case: str) -> np.ndarray:
@@ -31,12 +30,20 @@ def s2_marker_rows(shapes: dict, load_case: str) -> np.ndarray:
     return np.array(rows)
 
 
-def _simulator(load_case: str):
+def model_options(cfg: dict) -> dict:
+    """Keyword arguments of :func:`harnesspipe.models.branch.simulate` from the config."""
+    b = cfg["branch"]
+    return {"properties": b["properties"], "n_steps": b["n_steps"], "dt_min": b["dt_min"],
+            "stroke": b["stroke"], "rate": b["rate"]}
+
+
+def _simulator(cfg: dict, load_case: str):
     from harnesspipe.models import branch
+    options = model_options(cfg)
 
     def simulate(p: dict) -> Curve:
         curve, shapes = branch.simulate(load_case, p["alpha"], return_shapes=True,
-                                        shape_at=MARKER_DISPLACEMENTS)
+                                        shape_at=MARKER_DISPLACEMENTS, **options)
         return Curve(curve["displacement_mm"].to_numpy(), curve["force_N"].to_numpy(),
                      s2_marker_rows(shapes, load_case))
     return simulate
@@ -44,10 +51,10 @@ def _simulator(load_case: str):
 
 @register("branch")
 def branch_tests(cfg: dict) -> list[TestSpec]:
-    protocol = {"stroke_mm": STROKE, "rate_mm_s": RATE, "load_cell_N": LOAD_CELL}
+    b = cfg["branch"]
+    protocol = {"stroke_mm": b["stroke"], "rate_mm_s": b["rate"], "load_cell_N": b["load_cell_N"]}
     return [TestSpec(test_id=f"branch_{case}", kind="branch", item="y_harness", protocol=protocol,
-                     truth={"alpha": ALPHA}, simulate=_simulator(case), folder="branch",
-                     load_case=case,
-                     extra_truth={"model": "Y-harness ROM, default properties "
-                                           "(harnesspipe.models.branch.DEFAULT_PROPERTIES)"})
+                     truth={"alpha": cfg["paper"]["damping"]["alpha"]}, simulate=_simulator(cfg, case),
+                     folder="branch", load_case=case,
+                     extra_truth={"model": "Y-harness ROM, config branch.properties"})
             for case in ("inplane", "outofplane")]

@@ -22,7 +22,16 @@ from harnesspipe.stages.data import read_prepared
 STAGES = {  # stage -> (heading, paper table key, paper section)
     "tensile": ("Component tensile fits (Sec. 3.2, Table 2)", "table2", "Table 2"),
     "rom": ("Reduced-order beam properties (Sec. 4.3, eq. 13 + simplex, Table 3)", "table3", "Table 3"),
+    "branch": ("Branching harness: break-out joint damping (Sec. 5, eqs. 14-15)", "damping", "Sec. 5"),
 }
+
+
+def paper_values(cfg: dict, stage: str, item: str) -> dict | None:
+    """The paper's values for a fitted item (tables keyed by item; damping for every item)."""
+    table = cfg["paper"].get(STAGES[stage][1], {})
+    if stage == "branch":
+        return table
+    return table.get(item)
 
 CSS = """
 body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}
@@ -101,12 +110,12 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
 
 
 def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth: dict) -> str:
-    heading, table_key, table_name = STAGES[stage]
+    heading, _, table_name = STAGES[stage]
     blocks, summary = [], []
     for path in sorted(fits):
         fit = read_fit(path)
         prepared = read_prepared(results / "data" / f"{fit['test_id']}.h5")
-        paper = cfg["paper"].get(table_key, {}).get(fit["item"])
+        paper = paper_values(cfg, stage, fit["item"])
         tr = truth.get(fit["test_id"], {}).get("parameters")
         blocks.append(fit_block(fit, path.parent, prepared, paper, tr))
         for k, v in fit["parameters"].items():

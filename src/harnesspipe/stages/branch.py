@@ -1,0 +1,72 @@
+"""Stage 8, branching harness (Sec. 5): joint damping alpha of eq. 15.
+
+Calibrate alpha on the in-plane pull test (bounded 1-D search), then predict with
+no refit: the elastic joint (alpha = 0) on the in-plane test -- the paper's
+discrepancy -- and the out-of-plane test (Fig. 20) at the calibrated alpha.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from harnesspipe.calibrate.branch import fit_alpha
+from harnesspipe.calibrate.objective import l2_error, relative_l2_error
+from harnesspipe.calibrate.rom import objective_key
+from harnesspipe.models import branch
+from harnesspipe.report import plots
+from harnesspipe.stages.common import read_fit, write_csv, write_fit, write_shapes
+from harnesspipe.stages.data import read_prepared
+
+SHAPES_AT = (10.0, 25.0, 50.0)  # crosshead travels of the marker frames
+
+
+def model_options(settings: dict) -> dict:
+    return {k: settings[k] for k in ("properties", "n_steps", "dt_min", "stroke", "rate")}
+
+
+def _write(outdir: Path, item: str, ref, alpha: float, settings: dict, load_case: str,
+           nfev: int, converged: bool, wall_s: float, extra: dict) -> dict:
+    """Curve and shapes of the model at ``alpha`` against the prepared test ``ref``."""
+    curve, shapes = branch.simulate(load_case, alpha, return_shapes=True, shape_at=SHAPES_AT,
+                                    **model_options(settings))
+    if load_case == "outofplane":  # markers record the out-of-plane coordinate as y
+        shapes = {d: xyz[:, [0, 2, 1]] for d, xyz in shapes.items()}
+    write_shapes(outdir, shapes)
+    F_model = np.interp(ref.grid, curve["displacement_mm"], curve["force_N"])
+    path = write_fit(outdir, stage="branch", item=item, test_id=ref.test_id,
+                     parameters={"alpha": alpha}, error_l2=l2_error(ref.mean, F_model),
+                     error_rel=relative_l2_error(ref.mean, F_model), nfev=nfev, converged=converged,
+                     wall_s=wall_s, curve=curve, extra={"load_case": load_case, **extra})
+    plots.save(plots.fit_figure(ref, curve, title=item, label=f"Y-harness ROM, alpha = {alpha:.3g}"),
+               outdir / "fit.png")
+    return read_fit(path)
+
+
+def calibrate(reference: Path, settings: dict, outdir: Path, damping_csv: Path) -> dict:
+    """alpha from the in-plane test; writes the fit artefacts and damping.csv."""
+    ref = read_prepared(reference)
+    t0 = time.perf_counter()
+    res = fit_alpha(ref.grid, ref.mean, bounds=tuple(settings["alpha_bounds"]),
+                    xatol=settings["alpha_xatol"], load_case="inplane", log_path=Path(outdir) / "trace.h5",
+                    key=objective_key(ref.grid, ref.mean, settings), **model_options(settings))
+    fit = _write(Path(outdir), "in-plane pull: alpha calibrated", ref, res["alpha"], settings, "inplane",
+                 res["nfev"], True, time.perf_counter() - t0, {"role": "calibration"})
+    write_csv(damping_csv, pd.DataFrame({"parameter": ["alpha"], "value": [res["alpha"]]}))
+    return fit
+
+
+def predict(reference: Path, settings: dict, outdir: Path, load_case: str, alpha: float,
+            item: str, role: str) -> dict:
+    """The model at a given alpha against a test, with no refit."""
+    ref = read_prepared(reference)
+    t0 = time.perf_counter()
+    return _write(Path(outdir), item, ref, alpha, settings, load_case, 1, True,
+                  time.perf_counter() - t0, {"role": role})
+
+
+def read_alpha(damping_csv: Path) -> float:
+    frame = pd.read_csv(damping_csv)
+    return float(frame.loc[frame["parameter"] == "alpha", "value"].iloc[0])

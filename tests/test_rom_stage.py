@@ -1,0 +1,84 @@
+"""ROM extraction (Sec. 4.3): eq. 13 closed forms and recovery of Table 3 sets."""
+import math
+
+import numpy as np
+import pytest
+
+from harnesspipe import config as cfgmod
+from harnesspipe.calibrate import eq13
+from harnesspipe.calibrate import rom as rom_fit
+
+
+def test_eq13_on_an_exact_beam_theory_curve():
+    """A curve with slope 48 E I / L^3 returns E; F_2% L / (pi r^3) returns sigma_Y."""
+    E, r, L = 15.7, 7.05, 127.0
+    k = 48.0 * E * (math.pi * r**4 / 4.0) / L**3
+    u = np.linspace(0.0, 30.0, 301)
+    F = k * u
+    assert eq13.effective_modulus(u, F, L, r) == pytest.approx(E, rel=1e-12)
+    assert eq13.yield_stress(u, F, L, r) == pytest.approx(k * 0.02 * L * L / (math.pi * r**3), rel=1e-12)
+
+
+def test_linear_part_is_the_window_below_one_percent_of_the_span():
+    """A kink just above the window does not bias E; one inside it does, by design."""
+    u = np.linspace(0.0, 30.0, 301)
+    above = np.where(u <= 1.3, u, 1.3 + 0.2 * (u - 1.3))     # kink at 1.3 mm > 1.27 mm
+    inside = np.where(u <= 0.6, u, 0.6 + 0.2 * (u - 0.6))    # kink at 0.6 mm
+    assert eq13.linear_slope(u, above, 127.0) == pytest.approx(1.0, rel=1e-12)
+    assert eq13.linear_slope(u, inside, 127.0) < 0.9
+
+
+def test_noisy_linear_part_is_averaged():
+    rng = np.random.default_rng(1)
+    u = np.linspace(0.0, 30.0, 201)
+    F = 0.7 * u + 0.01 * rng.standard_normal(u.size)
+    assert eq13.linear_slope(u, F, 127.0) == pytest.approx(0.7, rel=0.02)
+
+
+def test_too_coarse_a_curve_is_refused():
+    u = np.linspace(0.0, 30.0, 11)
+    with pytest.raises(ValueError, match=r"only 0 points with 0 < u <= 1.27 mm"):
+        eq13.linear_slope(u, u, 127.0)
+    with pytest.raises(ValueError, match="must reach 2.54 mm"):
+        eq13.force_at(np.linspace(0, 2.0, 11), np.zeros(11), 2.54)
+
+
+def test_flow_stress_coordinates_map_one_to_one():
+    strains = (0.0005, 0.005, 0.05)
+    for p in [(0.6, 1.59, 0.3), (0.2, 0.97, 0.13), (8.6, 25.6, 0.12), (10.0, 30.8, 0.6)]:
+        s = rom_fit.flow_stresses(*p, strains)
+        assert rom_fit.hardening_from_three(s, strains) == pytest.approx(p, rel=1e-10)
+        assert rom_fit.hardening_from_two(p[0], s[1:], strains[1:]) == pytest.approx(p, rel=1e-10)
+    assert rom_fit.hardening_from_three((0.5, 0.9, 1.0), strains) is None   # n < 0 (concave)
+    assert rom_fit.hardening_from_two(0.6, (0.5, 0.9), strains[1:]) is None  # s_1 below sigma_Y
+
+
+def settings_for(cfg, case, maxfev=250):
+    rom = cfg["rom"]
+    return {"r_o": cfg["cases"][case]["r_o"], "supports": "rollers", "mu": 0.0, "reference": "measured",
+            "three_point": {k: cfg["three_point"][k] for k in ("span", "overhang", "deflection")},
+            "rom": {k: rom[k] for k in ("model_consistent_E", "linear_window", "yield_deflection",
+                                        "simplex_parameters", "simplex_space", "reference_strains",
+                                        "simplex", "initial_guess")},
+            "mesh": cfg["profiles"]["quick"]["rom"], "maxfev": maxfev}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", ["cwb19_t2_closed", "cwb19_t2_open_halflap", "cwb19_t2_open_coarse",
+                                  "cwb19_t2_fabric", "cwb10t1_9t2_fabric"])
+def test_recovers_table3_from_noise_free_curves(case):
+    """E and sigma_Y within 2 %; the fitted curve within 1 % of the peak force everywhere."""
+    cfg = cfgmod.load()
+    truth = cfg["paper"]["table3"][case]
+    settings = settings_for(cfg, case)
+    curve = rom_fit.simulate(truth, settings)
+    u = np.linspace(0.0, 30.0, 101)
+    F = np.interp(u, curve["deflection_mm"], curve["force_N"])
+    fit = rom_fit.fit(u, F, settings)
+    p = fit.parameters
+    assert p["E"] == pytest.approx(truth["E"], rel=0.02)
+    assert p["sigma_y"] == pytest.approx(truth["sigma_y"], rel=0.02)
+    refit = rom_fit.simulate(p, settings)
+    F_fit = np.interp(u, refit["deflection_mm"], refit["force_N"])
+    assert np.max(np.abs(F_fit - F)) < 0.01 * F.max()
+    assert fit.E_eq13 == pytest.approx(truth["E"], rel=0.02)   # eq. 13 alone is close, too

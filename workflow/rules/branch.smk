@@ -1,0 +1,87 @@
+# Stage 8: branching harness, break-out joint damping (Sec. 5, eqs. 14-15).
+
+BRANCH_TESTS = {e.get("load_case"): t for t, e in TESTS.items() if e.get("kind") == "branch"}
+
+
+def branch_settings():
+    b = config["branch"]
+    return json.dumps({k: b[k] for k in ("properties", "n_steps", "dt_min", "stroke", "rate",
+                                         "alpha_bounds", "alpha_xatol")}, sort_keys=True)
+
+
+BRANCH_CODE = source_hash("fe", "models/branch.py", "models/rom_beam.py", "calibrate/branch.py",
+                          "calibrate/simplex.py", "calibrate/objective.py", "stages/branch.py",
+                          "stages/common.py")
+
+
+rule branch_fit:
+    """Calibrate alpha on the in-plane pull test: results/branch/damping.csv."""
+    input:
+        ref=lambda wc: f"{RES}/data/{BRANCH_TESTS['inplane']}.h5",
+        warm=rules.numba_warmup.output,
+    output:
+        fit=f"{RES}/branch/inplane/fit.json",
+        curve=f"{RES}/branch/inplane/curve.csv",
+        trace=f"{RES}/branch/inplane/trace.h5",
+        shapes=f"{RES}/branch/inplane/shapes.csv",
+        plot=report(f"{RES}/branch/inplane/fit.png", caption="../report/branch.rst",
+                    category="Branch (Sec. 5)"),
+        damping=f"{RES}/branch/damping.csv",
+    log:
+        f"{RES}/logs/branch_fit.log",
+    params:
+        settings=branch_settings(),
+        code=BRANCH_CODE,
+    threads: 1
+    shell:
+        "NUMBA_NUM_THREADS={threads} {HP} stage branch-fit --reference {input.ref} "
+        "--settings '{params.settings}' --outdir {RES}/branch/inplane --damping {output.damping} > {log} 2>&1"
+
+
+rule branch_elastic:
+    """The elastic joint (alpha = 0) on the in-plane test: the paper's discrepancy (Fig. 18a)."""
+    input:
+        ref=lambda wc: f"{RES}/data/{BRANCH_TESTS['inplane']}.h5",
+        warm=rules.numba_warmup.output,
+    output:
+        fit=f"{RES}/branch/elastic/fit.json",
+        curve=f"{RES}/branch/elastic/curve.csv",
+        shapes=f"{RES}/branch/elastic/shapes.csv",
+        plot=report(f"{RES}/branch/elastic/fit.png", caption="../report/branch.rst",
+                    category="Branch (Sec. 5)"),
+    log:
+        f"{RES}/logs/branch_elastic.log",
+    params:
+        settings=branch_settings(),
+        code=BRANCH_CODE,
+    shell:
+        "{HP} stage branch-predict --reference {input.ref} --settings '{params.settings}' "
+        "--outdir {RES}/branch/elastic --load-case inplane --alpha 0 "
+        "--item 'in-plane pull: elastic joint (alpha = 0)' --role prediction > {log} 2>&1"
+
+
+rule branch_validate:
+    """The out-of-plane pull test (Fig. 20) at the calibrated alpha, no refit."""
+    input:
+        ref=lambda wc: f"{RES}/data/{BRANCH_TESTS['outofplane']}.h5",
+        damping=f"{RES}/branch/damping.csv",
+    output:
+        fit=f"{RES}/branch/outofplane/fit.json",
+        curve=f"{RES}/branch/outofplane/curve.csv",
+        shapes=f"{RES}/branch/outofplane/shapes.csv",
+        plot=report(f"{RES}/branch/outofplane/fit.png", caption="../report/branch.rst",
+                    category="Branch (Sec. 5)"),
+    log:
+        f"{RES}/logs/branch_validate.log",
+    params:
+        settings=branch_settings(),
+        code=BRANCH_CODE,
+    shell:
+        "{HP} stage branch-predict --reference {input.ref} --settings '{params.settings}' "
+        "--outdir {RES}/branch/outofplane --load-case outofplane --damping {input.damping} "
+        "--item 'out-of-plane pull: validation at calibrated alpha' > {log} 2>&1"
+
+
+if {"inplane", "outofplane"} <= set(BRANCH_TESTS):
+    FITS["branch"] = [f"{RES}/branch/{v}/fit.json" for v in ("inplane", "elastic", "outofplane")]
+    TARGETS.append(f"{RES}/branch/damping.csv")
