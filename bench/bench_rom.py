@@ -2,7 +2,8 @@
 
 Measures, on one core:
 * the median wall time of a full 30 mm three-point curve with roller supports on the
-  default mesh, after JIT (``--repeat`` runs);
+  default mesh, after JIT (``--repeat`` runs), and the median CPU time of the process
+  (``time.process_time``: less sensitive to other jobs on a shared machine);
 * the JIT time with an empty Numba cache and when loading from the cache (fresh
   subprocesses with HARNESSPIPE_NUMBA_CACHE pointing at a temporary folder);
 * optionally OpenSeesPy on the pinned model (co-rotational displacement-based fibre
@@ -37,16 +38,20 @@ COARSE = dict(n_elements=30, n_increments=15, n_rings=3, n_sectors=10)
 FINE = dict(n_elements=80, n_increments=20, n_rings=8, n_sectors=24)
 
 
+def timed(fn):
+    """(result, wall seconds, CPU seconds of this process) of ``fn()``."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    out = fn()
+    return out, time.perf_counter() - t0, time.process_time() - c0
+
+
 def warm_median(repeat: int, **mesh):
-    """Median wall of a full curve (after one untimed call) and the curve."""
+    """Median wall and CPU time of a full curve (after one untimed call), and the curve."""
     from harnesspipe import rom
     curve = rom.three_point(**CLOSED, **mesh)  # compile or load
-    walls = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        rom.three_point(**CLOSED, **mesh)
-        walls.append(time.perf_counter() - t0)
-    return statistics.median(walls), curve
+    runs = [timed(lambda: rom.three_point(**CLOSED, **mesh)) for _ in range(repeat)]
+    return (statistics.median(r[1] for r in runs), statistics.median(r[2] for r in runs),
+            curve)
 
 
 def deviation(curve, reference) -> float:
@@ -63,9 +68,8 @@ def first_call_seconds(cache: str) -> float:
 
 
 def opensees_pinned(E, sigma_y, radius, span, deflection, n_el, n_inc, n_rings, n_sectors):
-    """Pinned three-point curve with OpenSeesPy; returns (deflections, forces, wall)."""
+    """Pinned three-point curve with OpenSeesPy; returns (deflections, forces)."""
     import openseespy.opensees as ops
-    t0 = time.perf_counter()
     ops.wipe()
     ops.model("basic", "-ndm", 2, "-ndf", 3)
     for k in range(n_el + 1):
@@ -96,7 +100,7 @@ def opensees_pinned(E, sigma_y, radius, span, deflection, n_el, n_inc, n_rings, 
             raise RuntimeError("OpenSees did not converge")
         u.append(-ops.nodeDisp(mid, 2))
         F.append(ops.getLoadFactor(1))
-    return np.array(u), np.array(F), time.perf_counter() - t0
+    return np.array(u), np.array(F)
 
 
 def compare_opensees(repeat: int) -> str:
@@ -111,23 +115,25 @@ def compare_opensees(repeat: int) -> str:
     mesh = dict(n_el=40, n_inc=20, n_rings=8, n_sectors=24)
     ours = dict(n_elements=40, n_increments=20, n_rings=8, n_sectors=24)
     rom.three_point(**case, K=0.0, n=1.0, supports="pinned", **ours)
-    walls_h, walls_o = [], []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        curve = rom.three_point(**case, K=0.0, n=1.0, supports="pinned", **ours)
-        walls_h.append(time.perf_counter() - t0)
-        u, F, wall = opensees_pinned(**case, **mesh)
-        walls_o.append(wall)
+    ours_runs, ops_runs = [], []
+    for _ in range(repeat):  # alternating, so both see the same machine load
+        ours_runs.append(timed(lambda: rom.three_point(**case, K=0.0, n=1.0, supports="pinned",
+                                                       **ours)))
+        ops_runs.append(timed(lambda: opensees_pinned(**case, **mesh)))
+    curve, (u, F) = ours_runs[-1][0], ops_runs[-1][0]
     F_h = np.interp(u, curve["deflection_mm"], curve["force_N"])
     dev = np.max(np.abs(F_h[1:] - F[1:]) / np.abs(F[1:]))
-    th, to = statistics.median(walls_h), statistics.median(walls_o)
+    th, to = (statistics.median(r[1] for r in runs) for runs in (ours_runs, ops_runs))
+    ch, co = (statistics.median(r[2] for r in runs) for runs in (ours_runs, ops_runs))
     return (f"OpenSeesPy {_version('openseespy')} comparison, pinned supports, elastic-perfectly "
             f"plastic fibres (E 15.7, sigma_Y 0.6, K 0), 40 co-rotational dispBeamColumn elements, "
             f"3 Lobatto points, 8 x 24 fibres (OpenSees `patch circ`, harnesspipe polar Gauss), "
             f"20 displacement-controlled increments to 30 mm:\n"
             f"- largest force deviation over the curve: {100 * dev:.2f} %\n"
-            f"- median wall: harnesspipe {1e3 * th:.1f} ms, OpenSeesPy {1e3 * to:.1f} ms "
-            f"(ratio OpenSees/harnesspipe {to / th:.2f})")
+            f"- median wall ({repeat} alternating runs): harnesspipe {1e3 * th:.1f} ms, "
+            f"OpenSeesPy {1e3 * to:.1f} ms (ratio OpenSees/harnesspipe {to / th:.2f})\n"
+            f"- median CPU time: harnesspipe {1e3 * ch:.1f} ms, OpenSeesPy {1e3 * co:.1f} ms "
+            f"(ratio {co / ch:.2f})")
 
 
 def _version(dist: str) -> str:
@@ -157,24 +163,27 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as cache:
         cold = first_call_seconds(cache)
         cached = first_call_seconds(cache)
-    warm, curve = warm_median(args.repeat)
-    coarse, coarse_curve = warm_median(args.repeat, **COARSE)
+    warm, warm_cpu, curve = warm_median(args.repeat)
+    coarse, coarse_cpu, coarse_curve = warm_median(args.repeat, **COARSE)
     from harnesspipe import rom
     reference = rom.three_point(**CLOSED, **FINE)
-    ops = compare_opensees(max(3, args.repeat // 4))
+    ops = compare_opensees(max(5, args.repeat // 2))
     text = (f"{HEADING}\n\n"
             f"`bench/bench_rom.py`, {time.strftime('%Y-%m-%d')}, {platform.processor() or platform.machine()}, "
             f"Python {platform.python_version()}, numba {numba.__version__}, one thread.\n"
             f"Case: Table 3 closed tube (E 15.7, sigma_Y 0.6, K 1.59, n 0.3), r_o 7.05, rollers, "
             f"30 mm, default mesh (40 elements, 20 output increments, 4 x 12 fibres, 3 Lobatto "
             f"points), {len(curve)} curve rows.\n\n"
-            f"- full curve, warm (median of {args.repeat}): {1e3 * warm:.1f} ms (goal 50 ms); "
-            f"force deviation from an 80-element, 8 x 24-fibre reference: "
-            f"{100 * deviation(curve, reference):.2f} %\n"
-            f"- coarser mesh (30 elements, 15 increments, 3 x 10 fibres): {1e3 * coarse:.1f} ms, "
-            f"deviation {100 * deviation(coarse_curve, reference):.2f} %\n"
+            f"- full curve, warm (median of {args.repeat}): wall {1e3 * warm:.1f} ms (goal 50 ms), "
+            f"CPU {1e3 * warm_cpu:.1f} ms; force deviation from an 80-element, 8 x 24-fibre "
+            f"reference: {100 * deviation(curve, reference):.2f} %\n"
+            f"- coarser mesh (30 elements, 15 increments, 3 x 10 fibres): wall "
+            f"{1e3 * coarse:.1f} ms, CPU {1e3 * coarse_cpu:.1f} ms, deviation "
+            f"{100 * deviation(coarse_curve, reference):.2f} %\n"
             f"- first call in a fresh process, empty Numba cache (JIT): {cold:.1f} s\n"
-            f"- first call in a fresh process, from the cache: {cached:.2f} s\n\n{ops}\n")
+            f"- first call in a fresh process, from the cache: {cached:.2f} s\n"
+            f"- machine load (1-min average, {os.cpu_count()} cores) at the end: "
+            f"{os.getloadavg()[0]:.2f}\n\n{ops}\n")
     print(text)
     if not args.no_write:
         write_section(text)
