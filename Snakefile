@@ -27,6 +27,7 @@ TARGETS = []  # summary tables; each stage rule file adds its own
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/data.smk"
+include: "workflow/rules/tensile.smk"
 include: "workflow/rules/rom.smk"
 include: "workflow/rules/branch.smk"
 include: "workflow/rules/report.smk"

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from harnesspipe import config as cfgmod
-from harnesspipe.calibrate import eq13
+from harnesspipe.calibrate import eq13, hardening
 from harnesspipe.calibrate import rom as rom_fit
 
 
@@ -46,11 +46,11 @@ def test_too_coarse_a_curve_is_refused():
 def test_flow_stress_coordinates_map_one_to_one():
     strains = (0.0005, 0.005, 0.05)
     for p in [(0.6, 1.59, 0.3), (0.2, 0.97, 0.13), (8.6, 25.6, 0.12), (10.0, 30.8, 0.6)]:
-        s = rom_fit.flow_stresses(*p, strains)
-        assert rom_fit.hardening_from_three(s, strains) == pytest.approx(p, rel=1e-10)
-        assert rom_fit.hardening_from_two(p[0], s[1:], strains[1:]) == pytest.approx(p, rel=1e-10)
-    assert rom_fit.hardening_from_three((0.5, 0.9, 1.0), strains) is None   # n < 0 (concave)
-    assert rom_fit.hardening_from_two(0.6, (0.5, 0.9), strains[1:]) is None  # s_1 below sigma_Y
+        s = hardening.flow_stresses(*p, strains)
+        assert hardening.hardening_from_three(s, strains) == pytest.approx(p, rel=1e-10)
+        assert hardening.hardening_from_two(p[0], s[1:], strains[1:]) == pytest.approx(p, rel=1e-10)
+    assert hardening.hardening_from_three((0.5, 0.9, 1.0), strains) is None   # n < 0 (concave)
+    assert hardening.hardening_from_two(0.6, (0.5, 0.9), strains[1:]) is None  # s_1 below sigma_Y
 
 
 def settings_for(cfg, case, maxfev=250):

@@ -46,6 +46,7 @@ import numpy as np
 
 from harnesspipe import rom
 from harnesspipe.calibrate import eq13
+from harnesspipe.calibrate.hardening import flow_stresses, hardening_from_three, hardening_from_two
 from harnesspipe.calibrate.objective import l2_error
 from harnesspipe.calibrate.simplex import FitResult, nelder_mead
 
@@ -97,33 +98,6 @@ def objective_key(u, F, settings) -> str:
     h.update(np.ascontiguousarray(u, dtype=float).tobytes())
     h.update(np.ascontiguousarray(F, dtype=float).tobytes())
     return h.hexdigest()[:16]
-
-
-def flow_stresses(sigma_y, K, n, eps_ref):
-    """Eq. 2 flow stresses sigma_Y + K eps^n at each reference plastic strain."""
-    return tuple(sigma_y + K * e**n for e in eps_ref)
-
-
-def hardening_from_three(s, eps_ref):
-    """(sigma_Y, K, n) through three flow stresses at geometric strains, or None."""
-    (s0, s1, s2), eps0, q = s, eps_ref[0], eps_ref[1] / eps_ref[0]
-    if not 0.0 < s0 < s1 < s2:
-        return None
-    n = math.log((s2 - s1) / (s1 - s0)) / math.log(q)
-    if n <= 0.0:
-        return None
-    K = (s1 - s0) / (eps0**n * (q**n - 1.0))
-    sigma_y = s0 - K * eps0**n
-    return (sigma_y, K, n) if sigma_y > 0.0 else None
-
-
-def hardening_from_two(sigma_y, s, eps_ref):
-    """(sigma_Y, K, n) through two flow stresses with sigma_Y given, or None."""
-    (s1, s2), (e1, e2) = s, eps_ref
-    if not 0.0 < sigma_y < s1 < s2:
-        return None
-    n = math.log((s2 - sigma_y) / (s1 - sigma_y)) / math.log(e2 / e1)
-    return sigma_y, (s1 - sigma_y) / e1**n, n
 
 
 class Coordinates:

@@ -53,6 +53,18 @@ def register(sub) -> None:
     p.add_argument("--role", default="validation")
     p.set_defaults(func=_branch_predict)
 
+    p = ssub.add_parser("tensile-fit", help="calibrate one covering on its tensile test (Sec. 3.2)")
+    p.add_argument("--component", required=True, choices=("closed_tube", "open_tube", "fabric_tube"))
+    p.add_argument("--reference", type=Path, required=True, help="prepared test (HDF5)")
+    p.add_argument("--settings", type=_settings, required=True)
+    p.add_argument("--outdir", type=Path, required=True)
+    p.set_defaults(func=_tensile_fit)
+
+    p = ssub.add_parser("table2", help="collect tensile fits into table2.csv")
+    p.add_argument("--fits", type=Path, nargs="+", required=True)
+    p.add_argument("--out", type=Path, required=True)
+    p.set_defaults(func=_table2)
+
     p = ssub.add_parser("table3", help="collect ROM fits into table3.csv")
     p.add_argument("--fits", type=Path, nargs="+", required=True)
     p.add_argument("--out", type=Path, required=True)
@@ -84,6 +96,18 @@ def _branch_predict(args) -> int:
     alpha = args.alpha if args.alpha is not None else read_alpha(args.damping)
     fit = predict(args.reference, args.settings, args.outdir, args.load_case, alpha, args.item, args.role)
     print(json.dumps(fit, indent=2))
+    return 0
+
+
+def _tensile_fit(args) -> int:
+    from harnesspipe.stages.tensile import fit_component
+    print(json.dumps(fit_component(args.component, args.reference, args.settings, args.outdir), indent=2))
+    return 0
+
+
+def _table2(args) -> int:
+    from harnesspipe.stages.tensile import table2
+    print(table2(args.fits, args.out).to_string(index=False))
     return 0
 
 

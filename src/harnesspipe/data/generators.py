@@ -80,3 +80,39 @@ def three_point(cfg: dict) -> list[TestSpec]:
                      simulate=_three_point_simulator(cfg, case), folder="three_point",
                      extra_truth={"model": "ROM, roller supports, default profile"})
             for case, truth in three_point_truth(cfg).items()]
+
+
+def tensile_crosshead_scale(component: str) -> float:
+    """Crosshead travel per model displacement: 2 for the tubes' symmetric half model
+    (Sec. 3.2: 25 mm on the half for the 50 mm test), 1 for the fabric sheet."""
+    return 1.0 if component == "fabric_tube" else 2.0
+
+
+def _tensile_simulator(cfg: dict, component: str):
+    from harnesspipe.models import tensile
+    cov = cfg["coverings"][component]
+    nu = cfg["materials"][cov["material"]]["nu"]
+    scale = tensile_crosshead_scale(component)
+    extra = ({"pitch": cov["pitch"]} if component != "fabric_tube"
+             else {"elongation": cfg["tensile"]["fabric"]["extension"]})
+
+    def simulate(p: dict) -> Curve:
+        curve = tensile.simulate(component, p["E"], p["sigma_y"], p["K"], p["n"], nu,
+                                 preset="default", **extra)
+        return Curve(scale * curve["displacement_mm"].to_numpy(), curve["force_N"].to_numpy())
+    return simulate
+
+
+@register("tensile")
+def tensile_tests(cfg: dict) -> list[TestSpec]:
+    """The coverings' tensile tests (Sec. 2.1) from the tensile models at Table 2."""
+    specs = []
+    for component, truth in cfg["paper"]["table2"].items():
+        t = cfg["tensile"]["fabric" if component == "fabric_tube" else "tube"]
+        protocol = {"stroke_mm": t["extension"], "rate_mm_s": t["rate"], "load_cell_N": t["load_cell_N"]}
+        specs.append(TestSpec(test_id=f"tensile_{component}", kind="tensile", item=component,
+                              protocol=protocol, truth=dict(truth),
+                              simulate=_tensile_simulator(cfg, component), folder="tensile",
+                              extra_truth={"model": "tensile model (axisymmetric tube cell / fabric "
+                                                    "sheet), default preset"}))
+    return specs

@@ -7,14 +7,20 @@ import time
 def warm_up() -> dict[str, float]:
     """Run each model once on a tiny problem; return the wall time of each."""
     from harnesspipe import rom
+    from harnesspipe.models import branch, tensile
+    runs = {
+        "rom three-point": lambda: (
+            rom.three_point(E=20.0, sigma_y=0.5, K=2.0, n=0.3, radius=7.0, deflection=2.0),
+            rom.three_point(E=20.0, radius=7.0, supports="pinned", deflection=2.0, elastic=True)),
+        "rom cantilever": lambda: rom.cantilever(E=20.0, radius=7.0, length=100.0, tip_load=0.1,
+                                                 elastic=True),
+        "tensile tube": lambda: tensile.simulate("closed_tube", 1500.0, 8.0, 25.0, 0.2, preset="quick"),
+        "tensile fabric": lambda: tensile.simulate("fabric_tube", 90.0, 10.0, 30.0, 0.6, preset="quick"),
+        "branch": lambda: branch.simulate("inplane", 0.2, n_steps=10, stroke=1.0),
+    }
     timings = {}
-    t0 = time.perf_counter()
-    rom.three_point(E=20.0, sigma_y=0.5, K=2.0, n=0.3, radius=7.0, supports="rollers",
-                    deflection=2.0)
-    rom.three_point(E=20.0, sigma_y=0.5, K=2.0, n=0.3, radius=7.0, supports="pinned",
-                    deflection=2.0)
-    timings["rom three-point"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    rom.cantilever(E=20.0, radius=7.0, length=100.0, tip_load=0.1, elastic=True)
-    timings["rom cantilever"] = time.perf_counter() - t0
+    for name, run in runs.items():
+        t0 = time.perf_counter()
+        run()
+        timings[name] = time.perf_counter() - t0
     return timings

@@ -1,0 +1,67 @@
+"""Stage 2, component tensile fits (Sec. 3.2): Table 2.
+
+Closed and open tubes: Nelder-Mead on (E, sigma_Y, K, n) of the tube model.
+Fabric: eq. 3 for (E, sigma_Y) on the linear region, then Nelder-Mead on (K, n).
+The measured crosshead travel is mapped to the model's displacement (half of it
+for the tubes' symmetric half model, Sec. 3.2).
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from harnesspipe.calibrate import tensile as tcal
+from harnesspipe.calibrate.objective import l2_error, relative_l2_error
+from harnesspipe.calibrate.rom import objective_key
+from harnesspipe.data.generators import tensile_crosshead_scale
+from harnesspipe.models import tensile as tmodel
+from harnesspipe.report import plots
+from harnesspipe.stages.common import read_fit, write_csv, write_fit
+from harnesspipe.stages.data import read_prepared
+
+TABLE2_COLUMNS = ["component", "E", "sigma_y", "K", "n"]
+
+
+def fit_component(component: str, reference: Path, settings: dict, outdir: Path) -> dict:
+    """Calibrate one covering; write fit.json, curve.csv, trace.h5 and fit.png."""
+    outdir = Path(outdir)
+    ref = read_prepared(reference)
+    scale = tensile_crosshead_scale(component)
+    measured = pd.DataFrame({"displacement_mm": ref.grid / scale, "force_N": ref.mean})
+    common = {"preset": settings["preset"], "nu": settings["nu"], "xatol": settings["xatol"],
+              "fatol": settings["fatol"], "maxfev": settings["maxfev"],
+              "log_path": outdir / "trace.h5"}
+    t0 = time.perf_counter()
+    if component == "fabric_tube":
+        params, fit = tcal.calibrate_fabric(measured, initial=settings["initial"], **common)
+        extra = {"u_dev": params.pop("u_dev")}
+        sim = tmodel.simulate(component, *params.values(), settings["nu"], preset=settings["preset"],
+                              elongation=float(measured["displacement_mm"].max()))
+    else:
+        params, fit = tcal.calibrate_tube(component, measured, initial=settings["initial"],
+                                          pitch=settings["pitch"],
+                                          key=objective_key(ref.grid, ref.mean, settings), **common)
+        extra = {}
+        sim = tmodel.simulate(component, *params.values(), settings["nu"], preset=settings["preset"],
+                              pitch=settings["pitch"])
+    curve = pd.DataFrame({"displacement_mm": scale * sim["displacement_mm"], "force_N": sim["force_N"]})
+    F_fit = np.interp(ref.grid, curve["displacement_mm"], curve["force_N"])
+    path = write_fit(outdir, stage="tensile", item=component, test_id=ref.test_id, parameters=params,
+                     error_l2=l2_error(ref.mean, F_fit), error_rel=relative_l2_error(ref.mean, F_fit),
+                     nfev=fit.nfev, converged=fit.converged, wall_s=time.perf_counter() - t0,
+                     curve=curve, extra=extra)
+    plots.save(plots.fit_figure(ref, curve, title=f"{component}: tensile model at fitted values",
+                                xlabel="crosshead displacement [mm]", label="FE (fitted)"),
+               outdir / "fit.png")
+    return read_fit(path)
+
+
+def table2(fit_paths: list[Path], out_csv: Path) -> pd.DataFrame:
+    """results/tensile/table2.csv: component,E,sigma_y,K,n (DESIGN sec. 5)."""
+    rows = [{"component": f["item"], **f["parameters"]} for f in map(read_fit, fit_paths)]
+    frame = pd.DataFrame(rows, columns=TABLE2_COLUMNS)
+    write_csv(out_csv, frame)
+    return frame

@@ -1,0 +1,63 @@
+# Stage 2: component tensile fits (Sec. 3.2): results/tensile/table2.csv.
+
+TENSILE_COMPONENTS = sorted(e["item"] for e in TESTS.values() if e.get("kind") == "tensile")
+
+
+def tensile_settings(component):
+    cov = config["coverings"][component]
+    material = cov["material"]
+    guess = config["tensile"]["initial_guess"][material]
+    return json.dumps({
+        "preset": PROFILE["tensile"]["preset"],
+        "nu": config["materials"][material]["nu"],
+        "pitch": cov.get("pitch"),
+        "initial": guess,
+        "maxfev": PROFILE["simplex_maxfev"],
+        **config["tensile"]["simplex"],
+    }, sort_keys=True)
+
+
+rule tensile_fit:
+    """Nelder-Mead on the tensile model (tubes), eq. 3 + Nelder-Mead (fabric)."""
+    input:
+        ref=lambda wc: f"{RES}/data/{test_id_for('tensile', wc.component)}.h5",
+        warm=rules.numba_warmup.output,
+    output:
+        fit=f"{RES}/tensile/{{component}}/fit.json",
+        curve=f"{RES}/tensile/{{component}}/curve.csv",
+        trace=f"{RES}/tensile/{{component}}/trace.h5",
+        plot=report(f"{RES}/tensile/{{component}}/fit.png", caption="../report/tensile.rst",
+                    category="Tensile (Sec. 3.2)", subcategory="{component}"),
+    log:
+        f"{RES}/logs/tensile_fit_{{component}}.log",
+    params:
+        settings=lambda wc: tensile_settings(wc.component),
+        code=source_hash("fe", "models/tensile.py", "calibrate/tensile.py", "calibrate/hardening.py",
+                         "calibrate/simplex.py", "calibrate/objective.py", "stages/tensile.py",
+                         "stages/common.py"),
+    wildcard_constraints:
+        component="closed_tube|open_tube|fabric_tube",
+    threads: 1
+    shell:
+        "NUMBA_NUM_THREADS={threads} {HP} stage tensile-fit --component {wildcards.component} "
+        "--reference {input.ref} --settings '{params.settings}' "
+        "--outdir {RES}/tensile/{wildcards.component} > {log} 2>&1"
+
+
+rule table2:
+    """Table 2 across the coverings: results/tensile/table2.csv (component,E,sigma_y,K,n)."""
+    input:
+        [f"{RES}/tensile/{c}/fit.json" for c in TENSILE_COMPONENTS],
+    output:
+        f"{RES}/tensile/table2.csv",
+    log:
+        f"{RES}/logs/table2.log",
+    params:
+        code=source_hash("stages/tensile.py"),
+    shell:
+        "{HP} stage table2 --fits {input} --out {output} > {log} 2>&1"
+
+
+if TENSILE_COMPONENTS:
+    FITS["tensile"] = [f"{RES}/tensile/{c}/fit.json" for c in TENSILE_COMPONENTS]
+    TARGETS.append(f"{RES}/tensile/table2.csv")
