@@ -23,6 +23,8 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) bench/bench_rom.py
+	$(PY) bench/bench_tensile.py
+	$(PY) bench/bench_branch.py
 
 clean-results:
 	rm -rf results .snakemake

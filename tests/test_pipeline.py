@@ -46,12 +46,21 @@ def project(tmp_path_factory) -> Path:
 
 
 def test_outputs_of_every_stage(project):
-    assert (project / "results" / "data" / "check.txt").read_text().startswith("data/experimental: OK:")
-    table3 = pd.read_csv(project / "results" / "rom" / "table3.csv")
+    res = project / "results"
+    assert (res / "data" / "check.txt").read_text().startswith("data/experimental: OK: 11 tests")
+    table2 = pd.read_csv(res / "tensile" / "table2.csv")
+    assert list(table2.columns) == ["component", "E", "sigma_y", "K", "n"]
+    assert sorted(table2["component"]) == ["closed_tube", "fabric_tube", "open_tube"]
+    table3 = pd.read_csv(res / "rom" / "table3.csv")
     assert list(table3.columns) == ["case", "E", "sigma_y", "K", "n", "reference"]
     assert len(table3) == 6 and (table3[["E", "sigma_y", "K", "n"]] > 0).all().all()
-    html = (project / "results" / "report" / "index.html").read_text()
-    assert "Reduced-order beam properties" in html and "cwb19_t2_closed" in html
+    damping = pd.read_csv(res / "branch" / "damping.csv")
+    assert list(damping.columns) == ["parameter", "value"] and list(damping["parameter"]) == ["alpha"]
+    html = (res / "report" / "index.html").read_text()
+    for heading in ("Test data", "Component tensile fits", "Reduced-order beam properties",
+                    "Branching harness"):
+        assert heading in html
+    assert (res / "rom" / "cwb19_t2_closed" / "shapes.pvd").exists()
     assert "http://" not in html and "https://" not in html  # nothing to fetch: opens offline
 
 

@@ -10,12 +10,16 @@ coordinates:
     n = ln((s_2 - s_1) / (s_1 - s_0)) / ln q,   K = (s_1 - s_0) / (eps_0^n (q^n - 1)),
     sigma_Y = s_0 - K eps_0^n,
 
-admissible for s_0 < s_1 < s_2 with n > 0 and sigma_Y > 0.  With sigma_Y known,
-two flow stresses fix (K, n).
+admissible for s_0 < s_1 < s_2 with 0 < n <= N_MAX and sigma_Y > 0.  With
+sigma_Y known, two flow stresses fix (K, n).  N_MAX = 1 keeps the hardening
+concave, as in every set of Tables 1-3; without it, noisy curves of weakly
+hardening bundles are fitted by degenerate laws (n ~ 7, K ~ 1e7).
 """
 from __future__ import annotations
 
 import math
+
+N_MAX = 1.0  # largest admissible hardening exponent (concave hardening)
 
 
 def flow_stresses(sigma_y, K, n, eps_ref):
@@ -29,7 +33,7 @@ def hardening_from_three(s, eps_ref):
     if not 0.0 < s0 < s1 < s2:
         return None
     n = math.log((s2 - s1) / (s1 - s0)) / math.log(q)
-    if n <= 0.0:
+    if not 0.0 < n <= N_MAX:
         return None
     K = (s1 - s0) / (eps0**n * (q**n - 1.0))
     sigma_y = s0 - K * eps0**n
@@ -42,4 +46,6 @@ def hardening_from_two(sigma_y, s, eps_ref):
     if not 0.0 < sigma_y < s1 < s2:
         return None
     n = math.log((s2 - sigma_y) / (s1 - sigma_y)) / math.log(e2 / e1)
+    if not 0.0 < n <= N_MAX:
+        return None
     return sigma_y, (s1 - sigma_y) / e1**n, n
