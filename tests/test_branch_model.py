@@ -27,11 +27,12 @@ def test_connector_adds_compliance_one_over_k():
     props = {"E": 18.7, "radius": 7.05}          # elastic beams
     twb = {"E": 147.6, "radius": 3.6}
     L, l_twb, delta = 50.0, 30.0, 0.05
+    g = branch.Geometry()
     X = np.array([[0.0, 0, 0], [L, 0, 0], [L + l_twb, 0, 0], [2 * L + l_twb, 0, 0],
-                  [2 * L + l_twb + branch.H, 0, 0]])
+                  [2 * L + l_twb + g.H, 0, 0]])
     cwb, tb = "cwb19_t2_open_coarse", "twb19_t2"
     layout = branch.Layout(X, [(cwb, np.array([[0, 1]])), (cwb, np.array([[2, 3]]))],
-                           [(tb, l_twb, 1, 2)], np.arange(4), [0], 3, 4)
+                           [(tb, l_twb, 1, 2)], np.arange(4), [0], 3, 4, g)
     duration = 100.0
     model = branch.YHarness(layout, {cwb: props, tb: twb}, 0.0,
                             lambda t: np.array([delta * t / duration, 0.0, 0.0]),
@@ -39,7 +40,7 @@ def test_connector_adds_compliance_one_over_k():
     integrate(model, time_grid(duration, 10, duration / 10), branch.SETTINGS)
     k = bushing_stiffness(twb["E"], twb["E"] / (2 * 1.39), twb["radius"], l_twb)[0]
     EA = props["E"] * math.pi * props["radius"] ** 2
-    compliance = branch.H / branch.STRAND_EA + 2 * L / EA + 1.0 / k
+    compliance = g.H / g.strand_EA + 2 * L / EA + 1.0 / k
     assert model.tension == pytest.approx(delta / compliance, rel=1e-6)
 
 

@@ -5,7 +5,7 @@ BRANCH_TESTS = {e.get("load_case"): t for t, e in TESTS.items() if e.get("kind")
 
 def branch_settings():
     b = config["branch"]
-    return json.dumps({k: b[k] for k in ("properties", "n_steps", "dt_min", "stroke", "rate",
+    return json.dumps({k: b[k] for k in ("properties", "geometry", "n_steps", "dt_min", "stroke", "rate",
                                          "alpha_bounds", "alpha_xatol")}, sort_keys=True)
 
 

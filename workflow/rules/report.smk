@@ -5,10 +5,13 @@ rule effective_config:
     """The config of this run, with --config overrides applied, for the report."""
     output:
         f"{RES}/config.yaml",
+    log:
+        f"{RES}/logs/effective_config.log",
     params:
         cfg=json.dumps(config, sort_keys=True),
     run:
         Path(output[0]).write_text(yaml.safe_dump(json.loads(params.cfg), sort_keys=False))
+        Path(log[0]).write_text(f"wrote {output[0]} (profile {config['profile']})\n")
 
 
 def report_fits():

@@ -33,7 +33,8 @@ def s2_marker_rows(shapes: dict, load_case: str) -> np.ndarray:
 def model_options(cfg: dict) -> dict:
     """Keyword arguments of :func:`harnesspipe.models.branch.simulate` from the config."""
     b = cfg["branch"]
-    return {"properties": b["properties"], "n_steps": b["n_steps"], "dt_min": b["dt_min"],
+    return {"properties": b["properties"], "geometry": b["geometry"], "n_steps": b["n_steps"],
+            "dt_min": b["dt_min"],
             "stroke": b["stroke"], "rate": b["rate"]}
 
 

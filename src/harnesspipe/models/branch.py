@@ -63,11 +63,28 @@ from harnesspipe.fe.newmark_band import NewmarkSettings, integrate, time_grid
 from harnesspipe.fe.rotation import rotate_nodes
 from harnesspipe.models.rom_beam import Material
 
-L1, L2, L3, LE = 140.0, 203.0, 111.0, 38.0     # Fig. 16
-l1, l2, l3 = 13.0, 30.0, 30.0                  # Fig. 16, break-out TWB portions
-H = 625.0                                      # Fig. 16, aramid strand
-BRANCH_ANGLE = math.radians(30.0)              # Sec. 2.3: S2 and S3 30 deg apart
-STRAND_EA = 70.0e3 * math.pi * 0.5**2          # assumption: aramid, E 70 GPa, d 1 mm
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """Fig. 16 dimensions [mm] and the strand; the pipeline passes config ``branch.geometry``."""
+    L1: float = 140.0            # Fig. 16, S1 CWB
+    L2: float = 203.0            # Fig. 16, S2 CWB
+    L3: float = 111.0            # Fig. 16, S3 CWB
+    Le: float = 38.0             # Fig. 16, taped wire end of S2
+    l1: float = 13.0             # Fig. 16, break-out TWB portions
+    l2: float = 30.0
+    l3: float = 30.0
+    H: float = 625.0             # Fig. 16, aramid strand
+    angle_deg: float = 30.0      # Sec. 2.3: S2 and S3 30 deg apart
+    strand_E: float = 70.0e3     # assumption: aramid cord, E 70 GPa ...
+    strand_d: float = 1.0        # ... 1 mm diameter
+
+    @property
+    def strand_EA(self) -> float:
+        return self.strand_E * math.pi * self.strand_d**2 / 4.0
+
+
 RHO_WIRE = 4.34e-9                             # type 2 wire density (config materials)
 R_WIRE = 0.70                                  # type 2 wire outer radius (Table 1)
 NU = 0.39                                      # Table 1
@@ -127,6 +144,7 @@ class Layout:
     clamps: list
     tip: int
     head: int
+    geometry: Geometry
 
 
 def _chain(start, direction, lengths, size):
@@ -140,18 +158,20 @@ def _chain(start, direction, lengths, size):
     return np.array(pts), ends
 
 
-def build_layout(load_case: str, element_size: float) -> Layout:
+def build_layout(load_case: str, element_size: float, geometry: Geometry = Geometry()) -> Layout:
     """Node coordinates and connectivity of Fig. 16 (see the module docstring).
 
     Node order keeps the tangent banded: S1 from its zip-tie to the joint, the branch
     point, then S2 and S3 interleaved from the joint outwards, the crosshead last.
     """
+    g = geometry
+    angle = math.radians(g.angle_deg)
     d1 = np.array([-1.0, 0.0, 0.0])
     d2 = np.array([1.0, 0.0, 0.0])
-    d3 = np.array([math.cos(BRANCH_ANGLE), -math.sin(BRANCH_ANGLE), 0.0])
-    s1, _ = _chain(l1 * d1, d1, [L1], element_size)
-    s2, (cwb2_end, _) = _chain(l2 * d2, d2, [L2, LE], element_size)
-    s3, _ = _chain(l3 * d3, d3, [L3], element_size)
+    d3 = np.array([math.cos(angle), -math.sin(angle), 0.0])
+    s1, _ = _chain(g.l1 * d1, d1, [g.L1], element_size)
+    s2, (cwb2_end, _) = _chain(g.l2 * d2, d2, [g.L2, g.Le], element_size)
+    s3, _ = _chain(g.l3 * d3, d3, [g.L3], element_size)
     n1, n2, n3 = len(s1), len(s2), len(s3)
     order2 = [n1 + 1 + 2 * k if k < n3 else n1 + 1 + n3 + k for k in range(n2)]
     order3 = [n1 + 2 + 2 * k for k in range(n3)]
@@ -163,7 +183,7 @@ def build_layout(load_case: str, element_size: float) -> Layout:
     idx1 = np.arange(n1)[::-1]
     idx2, idx3 = np.array(order2), np.array(order3)
     hub, head = n1, nn - 1
-    X[head] = s2[-1] + H * LOAD_CASES[load_case]
+    X[head] = s2[-1] + g.H * LOAD_CASES[load_case]
 
     def conn(idx):
         return np.column_stack((idx[:-1], idx[1:])).astype(np.int64)
@@ -172,9 +192,9 @@ def build_layout(load_case: str, element_size: float) -> Layout:
              ("cwb19_t2_open_coarse", conn(idx2[:cwb2_end + 1])),
              ("twb19_t2", conn(idx2[cwb2_end:])),
              ("cwb19_t2_open_coarse", conn(idx3))]
-    bushings = [("twb38_t2", l1, hub, idx1[0]), ("twb19_t2", l2, hub, idx2[0]),
-                ("twb19_t2", l3, hub, idx3[0])]
-    return Layout(X, beams, bushings, idx2, [idx1[-1], idx3[-1]], idx2[-1], head)
+    bushings = [("twb38_t2", g.l1, hub, idx1[0]), ("twb19_t2", g.l2, hub, idx2[0]),
+                ("twb19_t2", g.l3, hub, idx3[0])]
+    return Layout(X, beams, bushings, idx2, [idx1[-1], idx3[-1]], idx2[-1], head, g)
 
 
 # -- the problem -----------------------------------------------------------------------
@@ -296,7 +316,8 @@ class YHarness:
                              self.d_state[2, k], self.d_trial[0, k], self.d_trial[1, k], fe, Ke)
             scatter_pair(a, b, fe, Ke, self.f, self.band, self.bandwidth)
         tip, head = self.layout.tip, self.layout.head
-        self.tension = truss_response(x[tip], x[head], H, STRAND_EA, fe, Ke)
+        g = self.layout.geometry
+        self.tension = truss_response(x[tip], x[head], g.H, g.strand_EA, fe, Ke)
         scatter_pair(tip, head, fe, Ke, self.f, self.band, self.bandwidth)
         return self.f, self.band
 
@@ -315,7 +336,7 @@ class YHarness:
 
 def run(load_case: str = "inplane", alpha: float = 0.2, properties: dict | None = None,
         n_steps: int = 60, dt_min: float = 0.02, stroke: float = 50.0, rate: float = 1.0,
-        shape_at=(), mesh: BranchMesh = BranchMesh(),
+        shape_at=(), mesh: BranchMesh = BranchMesh(), geometry: Geometry | dict = Geometry(),
         settings: NewmarkSettings = SETTINGS) -> BranchRun:
     """Pull the strand ``stroke`` mm at ``rate`` mm/s; curve at every time step.
 
@@ -330,7 +351,8 @@ def run(load_case: str = "inplane", alpha: float = 0.2, properties: dict | None 
     if not (stroke > 0.0 and rate > 0.0):
         raise ValueError(f"stroke and rate must be > 0, got {stroke}, {rate}")
     props = {**DEFAULT_PROPERTIES, **(properties or {})}
-    layout = build_layout(load_case, mesh.element_size)
+    geometry = geometry if isinstance(geometry, Geometry) else Geometry(**geometry)
+    layout = build_layout(load_case, mesh.element_size, geometry)
     head0 = layout.X[layout.head].copy()
     direction = LOAD_CASES[load_case]
     model = YHarness(layout, props, alpha, lambda t: rate * t * direction, mesh)
@@ -350,7 +372,7 @@ def run(load_case: str = "inplane", alpha: float = 0.2, properties: dict | None 
                 shapes[round(ts * rate, 9)] = model.s2_shape()
 
     iterations = integrate(model, times, settings, record, length_scale=stroke,
-                           force_floor=1e-9 * STRAND_EA / H)
+                           force_floor=1e-9 * geometry.strand_EA / geometry.H)
     curve = pd.DataFrame(rows, columns=["time_s", "displacement_mm", "force_N", "reaction_N"])
     return BranchRun(curve, shapes, iterations)
 

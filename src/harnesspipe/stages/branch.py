@@ -24,7 +24,7 @@ SHAPES_AT = (10.0, 25.0, 50.0)  # crosshead travels of the marker frames
 
 
 def model_options(settings: dict) -> dict:
-    return {k: settings[k] for k in ("properties", "n_steps", "dt_min", "stroke", "rate")}
+    return {k: settings[k] for k in ("properties", "geometry", "n_steps", "dt_min", "stroke", "rate")}
 
 
 def _write(outdir: Path, item: str, ref, alpha: float, settings: dict, load_case: str,
