@@ -79,16 +79,16 @@ def simulate(params: dict, settings: dict, return_shapes: bool = False):
 def effective_modulus(u, F, settings) -> tuple[float, float]:
     """(E used by the model, E of eq. 13); they differ only with model_consistent_E."""
     span, r_o, rs = settings["three_point"]["span"], settings["r_o"], settings["rom"]
-    E_eq13 = eq13.effective_modulus(u, F, span, r_o, rs["linear_window"])
+    slope, u_lin = eq13.linear_part(u, F, span, rs["linear_window"])
+    E_eq13 = eq13.modulus_from_slope(slope, span, r_o)
     if not rs["model_consistent_E"]:
         return E_eq13, E_eq13
     tp = settings["three_point"]
     elastic = rom.three_point(E=E_eq13, radius=r_o, supports=settings["supports"], span=span,
                               overhang=tp["overhang"], deflection=tp["deflection"], mu=settings["mu"],
-                              elastic=True,
-                              **settings["mesh"])
+                              elastic=True, **settings["mesh"])
     F_model = np.interp(u, elastic["deflection_mm"], elastic["force_N"])
-    E_model = eq13.effective_modulus(u, F_model, span, r_o, rs["linear_window"])
+    E_model = eq13.modulus_from_slope(eq13.slope_up_to(u, F_model, u_lin), span, r_o)
     return E_eq13 * E_eq13 / E_model, E_eq13
 
 
