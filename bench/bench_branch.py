@@ -13,15 +13,13 @@ import argparse
 import os
 import platform
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
-RESULTS = Path(__file__).resolve().parent / "RESULTS.md"
+from benchlib import fresh_process_seconds, write_section
+
 HEADING = "## Branch Y-harness ROM"
 FIRST_CALL = ("import time; t = time.perf_counter(); from harnesspipe.models import branch; "
               "branch.simulate('inplane', 0.2); print(time.perf_counter() - t)")
@@ -39,13 +37,6 @@ def warm_median(repeat: int) -> float:
     return statistics.median(walls)
 
 
-def first_call_seconds(cache: str) -> float:
-    env = {**os.environ, "HARNESSPIPE_NUMBA_CACHE": cache, "NUMBA_NUM_THREADS": "1"}
-    out = subprocess.run([sys.executable, "-c", FIRST_CALL], env=env, check=True,
-                         capture_output=True, text=True)
-    return float(out.stdout.strip().splitlines()[-1])
-
-
 def alpha_effect(rate: float, dt_min: float) -> str:
     """'u: F_0.2 vs F_0 (+diff %)' at the TRAVELS for the in-plane pull at ``rate``."""
     from harnesspipe.models import branch
@@ -57,23 +48,14 @@ def alpha_effect(rate: float, dt_min: float) -> str:
                      for u, a, b in zip(TRAVELS, F[0.2], F[0.0]))
 
 
-def write_section(text: str) -> None:
-    old = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
-    start = old.find(HEADING)
-    if start >= 0:
-        nxt = old.find("\n## ", start + len(HEADING))
-        old = old[:start] + (old[nxt + 1:] if nxt >= 0 else "")
-    RESULTS.write_text(old.rstrip() + "\n\n" + text.rstrip() + "\n")
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=10)
     args = parser.parse_args()
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     with tempfile.TemporaryDirectory() as cache:
-        cold = first_call_seconds(cache)
-        cached = first_call_seconds(cache)
+        cold = fresh_process_seconds(FIRST_CALL, cache)[0]
+        cached = fresh_process_seconds(FIRST_CALL, cache)[0]
     warm = warm_median(args.repeat)
     slow = alpha_effect(rate=1.0, dt_min=0.02)
     fast = alpha_effect(rate=50.0, dt_min=0.0004)
@@ -90,7 +72,7 @@ def main() -> None:
             "Alpha effect, strand force at alpha 0.2 vs 0 (elastic joint):\n"
             f"- 1 mm/s (the test, 50 s): {slow}\n"
             f"- 50 mm in 1 s (the paper's Fig. 18a reading): {fast}\n")
-    write_section(text)
+    write_section(HEADING, text)
     print(text)
 
 

@@ -18,16 +18,14 @@ import argparse
 import os
 import platform
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
 CLOSED = dict(E=15.7, sigma_y=0.6, K=1.59, n=0.3, radius=7.05)  # Table 3, closed tube
-RESULTS = Path(__file__).resolve().parent / "RESULTS.md"
+from benchlib import fresh_process_seconds, write_section
+
 HEADING = "## ROM three-point"
 FIRST_CALL = ("import time; t = time.perf_counter(); from harnesspipe import rom; "
               "rom.three_point(E=15.7, sigma_y=0.6, K=1.59, n=0.3, radius=7.05); "
@@ -58,13 +56,6 @@ def deviation(curve, reference) -> float:
     """Largest force difference from the reference curve, relative to its peak."""
     F = np.interp(reference["deflection_mm"], curve["deflection_mm"], curve["force_N"])
     return float(np.max(np.abs(F - reference["force_N"])) / reference["force_N"].max())
-
-
-def first_call_seconds(cache: str) -> float:
-    env = {**os.environ, "HARNESSPIPE_NUMBA_CACHE": cache, "NUMBA_NUM_THREADS": "1"}
-    out = subprocess.run([sys.executable, "-c", FIRST_CALL], env=env, check=True,
-                         capture_output=True, text=True)
-    return float(out.stdout.strip().splitlines()[-1])
 
 
 def opensees_pinned(E, sigma_y, radius, span, deflection, n_el, n_inc, n_rings, n_sectors):
@@ -144,15 +135,6 @@ def _version(dist: str) -> str:
         return "?"
 
 
-def write_section(text: str) -> None:
-    old = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
-    start = old.find(HEADING)
-    if start >= 0:
-        nxt = old.find("\n## ", start + len(HEADING))
-        old = old[:start].rstrip() + ("\n" + old[nxt:] if nxt >= 0 else "")
-    RESULTS.write_text(old.rstrip() + "\n\n" + text.rstrip() + "\n")
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=20)
@@ -161,8 +143,8 @@ def main() -> None:
     import numba
     numba.set_num_threads(1)
     with tempfile.TemporaryDirectory() as cache:
-        cold = first_call_seconds(cache)
-        cached = first_call_seconds(cache)
+        cold = fresh_process_seconds(FIRST_CALL, cache)[0]
+        cached = fresh_process_seconds(FIRST_CALL, cache)[0]
     warm, warm_cpu, curve = warm_median(args.repeat)
     coarse, coarse_cpu, coarse_curve = warm_median(args.repeat, **COARSE)
     from harnesspipe import rom
@@ -186,7 +168,7 @@ def main() -> None:
             f"{os.getloadavg()[0]:.2f}\n\n{ops}\n")
     print(text)
     if not args.no_write:
-        write_section(text)
+        write_section(HEADING, text)
 
 
 if __name__ == "__main__":

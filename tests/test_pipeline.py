@@ -64,6 +64,13 @@ def test_outputs_of_every_stage(project):
     assert "http://" not in html and "https://" not in html  # nothing to fetch: opens offline
 
 
+def test_snakemake_report_collects_the_figures(project):
+    out = project / "results" / "snakemake_report.html"
+    run = snakemake(project, "--report", str(out))
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert out.stat().st_size > 100_000 and "fit.png" in run.stdout + run.stderr
+
+
 def test_untouched_tree_reruns_nothing(project):
     assert planned_jobs(project) == {}
 

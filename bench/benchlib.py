@@ -1,0 +1,30 @@
+"""Helpers shared by the benchmark scripts: fresh-process JIT timing and RESULTS.md sections."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+RESULTS = Path(__file__).resolve().parent / "RESULTS.md"
+
+
+def fresh_process_seconds(script: str, cache: str) -> list[float]:
+    """Run ``script`` in a new interpreter with the Numba cache at ``cache`` (one thread);
+    return the numbers it prints on its last line (its own timings of the first calls)."""
+    env = {**os.environ, "HARNESSPIPE_NUMBA_CACHE": cache, "NUMBA_NUM_THREADS": "1"}
+    out = subprocess.run([sys.executable, "-c", script], env=env, check=True,
+                         capture_output=True, text=True)
+    return [float(v) for v in out.stdout.strip().splitlines()[-1].split()]
+
+
+def write_section(heading: str, text: str) -> None:
+    """Replace the section ``heading`` of RESULTS.md in place (append it if new)."""
+    old = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
+    start = old.find(heading + "\n")
+    if start < 0:
+        RESULTS.write_text(old.rstrip() + "\n\n" + text.rstrip() + "\n")
+        return
+    nxt = old.find("\n## ", start + len(heading))
+    tail = old[nxt:] if nxt >= 0 else "\n"
+    RESULTS.write_text(old[:start] + text.rstrip() + "\n" + tail)
