@@ -1,5 +1,8 @@
-"""Force-error norms of eq. 4."""
+"""Force-error norms of eq. 4 and the identity of an objective."""
 from __future__ import annotations
+
+import hashlib
+import json
 
 import numpy as np
 
@@ -21,3 +24,11 @@ def relative_l2_error(f_exp, f_fe) -> float:
 def on_grid(u_sim, f_sim, u_grid):
     """Simulated force interpolated onto the measurement grid (NaN outside its range)."""
     return np.interp(u_grid, u_sim, f_sim, left=np.nan, right=np.nan)
+
+
+def objective_key(u, F, settings) -> str:
+    """Identity of an objective: its settings and reference curve (for log replay)."""
+    h = hashlib.sha256(json.dumps(settings, sort_keys=True).encode())
+    h.update(np.ascontiguousarray(u, dtype=float).tobytes())
+    h.update(np.ascontiguousarray(F, dtype=float).tobytes())
+    return h.hexdigest()[:16]

@@ -37,8 +37,6 @@ initial guess plus 5 % per coordinate, and sigma_Y, K, n are reported.
 """
 from __future__ import annotations
 
-import hashlib
-import json
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,7 +44,7 @@ import numpy as np
 from harnesspipe import rom
 from harnesspipe.calibrate import eq13
 from harnesspipe.calibrate.hardening import flow_stresses, hardening_from_three, hardening_from_two
-from harnesspipe.calibrate.objective import l2_error
+from harnesspipe.calibrate.objective import l2_error, objective_key
 from harnesspipe.calibrate.simplex import FitResult, nelder_mead
 
 SHAPE_DEFLECTIONS = (0.0, 10.0, 20.0, 30.0)  # bent-shape frames kept with a fit
@@ -89,14 +87,6 @@ def effective_modulus(u, F, settings) -> tuple[float, float]:
     F_model = np.interp(u, elastic["deflection_mm"], elastic["force_N"])
     E_model = eq13.modulus_from_slope(eq13.slope_up_to(u, F_model, u_lin), span, r_o)
     return E_eq13 * E_eq13 / E_model, E_eq13
-
-
-def objective_key(u, F, settings) -> str:
-    """Identity of an objective: its settings and reference curve (for log replay)."""
-    h = hashlib.sha256(json.dumps(settings, sort_keys=True).encode())
-    h.update(np.ascontiguousarray(u, dtype=float).tobytes())
-    h.update(np.ascontiguousarray(F, dtype=float).tobytes())
-    return h.hexdigest()[:16]
 
 
 class Coordinates:

@@ -82,17 +82,11 @@ def three_point(cfg: dict) -> list[TestSpec]:
             for case, truth in three_point_truth(cfg).items()]
 
 
-def tensile_crosshead_scale(component: str) -> float:
-    """Crosshead travel per model displacement: 2 for the tubes' symmetric half model
-    (Sec. 3.2: 25 mm on the half for the 50 mm test), 1 for the fabric sheet."""
-    return 1.0 if component == "fabric_tube" else 2.0
-
-
 def _tensile_simulator(cfg: dict, component: str):
     from harnesspipe.models import tensile
     cov = cfg["coverings"][component]
     nu = cfg["materials"][cov["material"]]["nu"]
-    scale = tensile_crosshead_scale(component)
+    scale = tensile.crosshead_scale(component)
     extra = ({"pitch": cov["pitch"]} if component != "fabric_tube"
              else {"elongation": cfg["tensile"]["fabric"]["extension"]})
 

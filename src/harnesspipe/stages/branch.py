@@ -13,8 +13,7 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe.calibrate.branch import fit_alpha
-from harnesspipe.calibrate.objective import l2_error, relative_l2_error
-from harnesspipe.calibrate.rom import objective_key
+from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
 from harnesspipe.models import branch
 from harnesspipe.report import plots
 from harnesspipe.stages.common import read_fit, write_csv, write_fit, write_shapes

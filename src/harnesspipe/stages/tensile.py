@@ -14,9 +14,7 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe.calibrate import tensile as tcal
-from harnesspipe.calibrate.objective import l2_error, relative_l2_error
-from harnesspipe.calibrate.rom import objective_key
-from harnesspipe.data.generators import tensile_crosshead_scale
+from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
 from harnesspipe.models import tensile as tmodel
 from harnesspipe.report import plots
 from harnesspipe.stages.common import read_fit, write_csv, write_fit
@@ -29,7 +27,7 @@ def fit_component(component: str, reference: Path, settings: dict, outdir: Path)
     """Calibrate one covering; write fit.json, curve.csv, trace.h5 and fit.png."""
     outdir = Path(outdir)
     ref = read_prepared(reference)
-    scale = tensile_crosshead_scale(component)
+    scale = tmodel.crosshead_scale(component)
     measured = pd.DataFrame({"displacement_mm": ref.grid / scale, "force_N": ref.mean})
     common = {"preset": settings["preset"], "nu": settings["nu"], "xatol": settings["xatol"],
               "fatol": settings["fatol"], "maxfev": settings["maxfev"],
