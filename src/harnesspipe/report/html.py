@@ -85,7 +85,8 @@ def data_section(summary: str, prepared_paths: list[Path], truth: dict) -> str:
 def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dict | None) -> str:
     curve = pd.read_csv(fit_dir / "curve.csv")
     names = list(fit["parameters"])
-    rows = [["fitted"] + [fit["parameters"][k] for k in names]]
+    label = "fitted" if fit.get("role", "calibration") == "calibration" else f"used ({fit['role']}, no refit)"
+    rows = [[label] + [fit["parameters"][k] for k in names]]
     if truth:
         rows.append(["truth (synthetic)"] + [truth.get(k, "") for k in names])
     if paper:
