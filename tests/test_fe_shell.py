@@ -196,3 +196,85 @@ def test_shell_explicit_force_and_mass():
     m = lumped_mass(X, conn, 0.3, 2.0)
     area = sum(0.5 * np.linalg.norm(np.cross(X[c[2]] - X[c[0]], X[c[3]] - X[c[1]])) for c in conn)
     assert m[0::6].sum() == pytest.approx(2.0 * 0.3 * area)
+
+
+# --- eq. 12 orthotropic elastic plane stress (fabric tube, Sec. 4.2.2) -------------
+FABRIC = (93.5, 31.0, 0.3)  # E1 (Sec. 3.2), an illustrative weft E2, nu12
+
+
+def orthotropic_strip(axis, L=10.0, W=2.0, t=0.3, U=0.01):
+    """Linear response of a flat strip pulled along x by U, free lateral edges (uniaxial
+    stress); returns (axial force, lateral strain, model)."""
+    from harnesspipe.fe.plane_stress import fabric_shear_modulus
+    X, conn = grid(np.linspace(0, L, 5), np.linspace(0, W, 3))
+    model = Shell.orthotropic(X, conn, t, *FABRIC, axis=axis)
+    assert model.mat[3] == pytest.approx(fabric_shear_modulus(*FABRIC))
+    left, right = np.flatnonzero(X[:, 0] == 0), np.flatnonzero(X[:, 0] == L)
+    # drilling spins left free: under off-axis loading the strip shears and rotates
+    prescribed = {k: 0.0 for k in np.concatenate([dofs(left, [0]), dofs(left[0], [1]),
+                                                  dofs(np.arange(len(X)), [2, 3, 4])])}
+    prescribed.update({k: U for k in dofs(right, [0])})
+    u = linear_solution(model, prescribed)
+    K, _ = model.tangent_and_force()
+    force = (K @ u)[dofs(right, [0])].sum()
+    top = np.flatnonzero(X[:, 1] == W)
+    bottom = np.flatnonzero(X[:, 1] == 0)
+    lateral = (u[dofs(top, [1])].mean() - u[dofs(bottom, [1])].mean()) / W
+    return force, lateral, model
+
+
+def test_orthotropic_strip_along_directions_1_and_2():
+    E1, E2, nu12 = FABRIC
+    L, W, t, U = 10.0, 2.0, 0.3, 0.01
+    f1, lat1, _ = orthotropic_strip(None, L, W, t, U)            # default: local x = direction 1
+    f2, lat2, _ = orthotropic_strip((0.0, 1.0, 0.0), L, W, t, U)  # axes turned by 90 deg
+    assert f1 == pytest.approx(E1 * W * t * U / L, rel=1e-6)
+    assert f2 == pytest.approx(E2 * W * t * U / L, rel=1e-6)
+    assert f1 / f2 == pytest.approx(E1 / E2, rel=1e-6)
+    assert lat1 == pytest.approx(-nu12 * U / L, rel=1e-6)
+    assert lat2 == pytest.approx(-nu12 * E2 / E1 * U / L, rel=1e-6)  # nu21 = nu12 E2 / E1
+    f1x, _, _ = orthotropic_strip((-3.0, 0.0, 0.0), L, W, t, U)      # sign and length irrelevant
+    assert f1x == pytest.approx(f1, rel=1e-9)
+
+
+@pytest.mark.parametrize("axis", [(1.0, 1.0, 0.0), (1.0, 1.0, 0.9)])  # second: projected
+def test_orthotropic_strip_at_45_degrees_apparent_modulus(axis):
+    from harnesspipe.fe.plane_stress import fabric_shear_modulus
+    E1, E2, nu12 = FABRIC
+    G12 = fabric_shear_modulus(E1, E2, nu12)
+    L, W, t, U = 10.0, 2.0, 0.3, 0.01
+    force, _, model = orthotropic_strip(axis, L, W, t, U)
+    assert np.allclose(model.axes[..., 0], np.sqrt(0.5)) and np.allclose(model.axes[..., 1], np.sqrt(0.5))
+    E45 = 4.0 / (1 / E1 + 1 / E2 + 1 / G12 - 2 * nu12 / E1)
+    assert force / (W * t * U / L) == pytest.approx(E45, rel=0.01)
+
+
+@pytest.mark.parametrize("axis", [(1.0, 0.0, 0.0), (0.0, 1.0, 0.0)])
+def test_orthotropic_simple_shear_patch_gives_G12(axis):
+    """Distorted MacNeal-Harder patch in simple shear u = (gamma y, 0): interior nodes
+    reproduce the field and the strain energy is G12 gamma^2 V / 2 (one axis for all
+    elements: the default local x axes differ between the distorted elements)."""
+    E1, E2, nu12, G12, t, gamma = *FABRIC, 17.0, 0.001, 1e-3
+    model = Shell.orthotropic(PATCH, PATCH_CONN, t, E1, E2, nu12, G12, axis=axis)
+    prescribed = {k: 0.0 for k in dofs(range(8), [2, 3, 4])}
+    for a in range(4):
+        prescribed.update({6 * a: gamma * PATCH[a, 1], 6 * a + 1: 0.0, 6 * a + 5: -gamma / 2})
+    u = linear_solution(model, prescribed)
+    for a in range(4, 8):
+        assert u[6 * a:6 * a + 2] == pytest.approx((gamma * PATCH[a, 1], 0.0), abs=1e-9 * gamma)
+    K, _ = model.tangent_and_force()
+    energy = 0.5 * u @ (K @ u)
+    assert energy == pytest.approx(0.5 * G12 * gamma**2 * 0.24 * 0.12 * t, rel=1e-5)
+
+
+def test_orthotropic_explicit_force_matches_implicit_and_keeps_thickness():
+    X, conn = grid(np.linspace(0, 4, 3), np.linspace(0, 2, 3), lambda x, y: (x, y, 0.1 * x * y))
+    axes = np.random.default_rng(5).standard_normal((len(conn), 3))  # one direction per element
+    model = Shell.orthotropic(X, conn, 0.3, *FABRIC, axis=axes)
+    model.advance(0.05 * np.random.default_rng(4).standard_normal(model.n_dof))
+    _, f = model.tangent_and_force()
+    assert np.allclose(model.internal_force(), f, rtol=1e-12, atol=1e-12)
+    model.accept()
+    assert np.allclose(model.h, 0.3)
+    with pytest.raises(ValueError):
+        Shell(X, conn, 0.3, 1000.0, 0.3, 5.0, 10.0, 0.5, orthotropic=FABRIC)

@@ -136,3 +136,25 @@ def orthotropic_plane_stress_stiffness(E1, E2, nu12, G12, D):
 def fabric_shear_modulus(E1: float, E2: float, nu12: float) -> float:
     """G12 = 0.5 (E1 + E2) / (2 (1 + nu12)) as chosen in Sec. 4.2.2."""
     return 0.5 * (E1 + E2) / (2.0 * (1.0 + nu12))
+
+
+@njit(cache=True)
+def orthotropic_plane_stress(eps, c, s, Dmat, sig):
+    """Eq. 12 stress for an in-plane strain given in a frame (e1, e2) whose material
+    direction 1 is ``c e1 + s e2`` (c = cos, s = sin of the angle from e1 to axis 1).
+
+    ``eps`` (3,) strain (eps_11, eps_22, gamma_12) in the (e1, e2) frame, ``Dmat``
+    (3, 3) from :func:`orthotropic_plane_stress_stiffness` (material axes); writes
+    ``sig`` (3,) in the (e1, e2) frame: sig = T^T Dmat T eps with T the engineering
+    strain rotation, i.e. the stress that is work-conjugate to ``eps``.
+    """
+    cc, ss, cs = c * c, s * s, c * s
+    m11 = cc * eps[0] + ss * eps[1] + cs * eps[2]
+    m22 = ss * eps[0] + cc * eps[1] - cs * eps[2]
+    m12 = 2.0 * cs * (eps[1] - eps[0]) + (cc - ss) * eps[2]
+    t11 = Dmat[0, 0] * m11 + Dmat[0, 1] * m22 + Dmat[0, 2] * m12
+    t22 = Dmat[1, 0] * m11 + Dmat[1, 1] * m22 + Dmat[1, 2] * m12
+    t12 = Dmat[2, 0] * m11 + Dmat[2, 1] * m22 + Dmat[2, 2] * m12
+    sig[0] = cc * t11 + ss * t22 - 2.0 * cs * t12
+    sig[1] = ss * t11 + cc * t22 + 2.0 * cs * t12
+    sig[2] = cs * (t11 - t22) + (cc - ss) * t12

@@ -24,6 +24,19 @@ Formulation (total Lagrangian, continuum-based / degenerated solid shell):
 * Thickness: h = h0 exp(eps_33), eps_33 the element mean of the material's
   through-thickness strain (plastic incompressibility + elastic Poisson), updated
   once per converged step; reference volumes use h0.
+* Materials (``mat[MAT_KIND]``): J2 plasticity with eq. 2 hardening
+  (``MAT_J2``, ``mat`` = (E, nu, sigma_y, K, n, 0); a 5-vector without the kind is
+  read as J2 too) or the orthotropic elastic plane-stress law of eq. 12 for the
+  fabric tube (``MAT_ORTHOTROPIC``, ``mat`` = (E1, E2, nu12, G12, 0, 1)).  The
+  orthotropic law acts on the Hencky strain in material axes that are fixed in the
+  reference configuration (Lagrangian, they convect with the material): direction 1
+  is a per-element vector projected onto the shell's tangent plane at each Gauss
+  point (default: the element's local x axis e1 at its centre), stored as
+  (cos, sin) of its angle from the Gauss point's e1.  Eq. 12 gives no transverse
+  moduli, so the transverse shear modulus (G13 = G23) is taken as G12 (the fabric's
+  only shear modulus; with kappa_s = 5/6 as for J2) and the drilling penalty uses
+  G12 too; nor does it give out-of-plane Poisson ratios, so the thickness of an
+  orthotropic shell is kept at h0 (eps_33 = 0 in the history).
 
 The internal force is analytical; the element tangent is its central finite
 difference with respect to nodal translations and spins, which contains the
@@ -35,7 +48,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.plane_stress import EPS33, STATE_SIZE, j2_plane_stress
+from harnesspipe.fe.plane_stress import (EPS33, STATE_SIZE, fabric_shear_modulus,
+                                         j2_plane_stress, orthotropic_plane_stress,
+                                         orthotropic_plane_stress_stiffness)
 
 N_THICKNESS = 5
 ZETA, ZETA_W = np.polynomial.legendre.leggauss(N_THICKNESS)
@@ -48,6 +63,24 @@ SHEAR_CORRECTION = 5.0 / 6.0
 DRILL_FACTOR = 1.0e-3
 DOF_PER_NODE = 6
 FD_STEP = 1.0e-6  # relative perturbation of the central-difference tangent
+MAT_KIND = 5  # index of the material kind in ``mat``
+MAT_J2, MAT_ORTHOTROPIC = 0, 1
+
+
+@njit(cache=True)
+def material_kind(mat):
+    """MAT_J2 or MAT_ORTHOTROPIC (a 5-vector ``mat`` is J2)."""
+    if mat.shape[0] > MAT_KIND and mat[MAT_KIND] == MAT_ORTHOTROPIC:
+        return MAT_ORTHOTROPIC
+    return MAT_J2
+
+
+@njit(cache=True)
+def shear_modulus(mat):
+    """Transverse shear (and drilling) modulus: E / (2 (1 + nu)) for J2, G12 for eq. 12."""
+    if material_kind(mat) == MAT_ORTHOTROPIC:
+        return mat[3]
+    return mat[0] / (2.0 * (1.0 + mat[1]))
 
 
 @njit(cache=True)
@@ -168,6 +201,32 @@ def reference_element(X, D, h0, Jinv, dV, shear_ref, Jc, T0):
 
 
 @njit(cache=True)
+def material_axes(X, D, h0, a1, axes):
+    """Material direction 1 of one element at its Gauss points: ``axes`` (4, 5, 2) =
+    (cos, sin) of the angle from the local e1 to ``a1`` (3,) projected onto the
+    tangent plane (normal e3); ``a1`` = 0 selects the local e1 at the element centre."""
+    N = np.empty(4)
+    dN = np.empty((4, 2))
+    J = np.empty((3, 3))
+    G = np.empty((3, 3))
+    e2 = np.empty(3)
+    a = a1.copy()
+    if np.sum(a * a) == 0.0:
+        a[:] = _local_jacobian(X, D, h0, 0.0, 0.0, 0.0, N, dN, G, J)
+    for g in range(4):
+        for z in range(N_THICKNESS):
+            e1 = _local_jacobian(X, D, h0, XI_GP[g, 0], XI_GP[g, 1], ZETA[z], N, dN, G, J)
+            e3 = G[:, 2] / np.sqrt(np.sum(G[:, 2] ** 2))
+            _cross(e3, e1, e2)
+            c, s = np.dot(a, e1), np.dot(a, e2)
+            r = np.sqrt(c * c + s * s)
+            if r < 1e-8 * np.sqrt(np.sum(a * a)):
+                raise ValueError("material direction 1 is normal to the shell")
+            axes[g, z, 0] = c / r
+            axes[g, z, 1] = s / r
+
+
+@njit(cache=True)
 def _spectral(C11, C22, C12):
     """Eigenvalues c1 >= c2 and the angle of the first eigenvector of a sym. 2 x 2."""
     mean = 0.5 * (C11 + C22)
@@ -210,21 +269,27 @@ def work_arrays():
     """Scratch arrays of :func:`element_force`, allocated once per assembly."""
     return (np.empty(4), np.empty((4, 2)), np.empty((3, 3)), np.empty((2, 3)), np.empty((2, 3)),
             np.empty(3), np.empty(3), np.empty((3, 3)), np.empty(4), np.empty((4, 4)),
-            np.empty(3), np.empty(3), np.empty(4), np.empty((4, 3)), np.empty((4, 3)))
+            np.empty(3), np.empty(3), np.empty(4), np.empty((4, 3)), np.empty((4, 3)),
+            np.empty((3, 3)))
 
 
 @njit(cache=True)
-def element_force(x, d, Jinv, dV, shear_ref, h0, h, mat, state_old, state_new, fe, work):
+def element_force(x, d, Jinv, dV, shear_ref, h0, h, mat, axes, state_old, state_new, fe, work):
     """Internal force ``fe`` (4, 6) (forces, moments) of one element.
 
     ``x`` (4, 3) current nodes, ``d`` (4, 3) current directors, reference data from
     :func:`reference_element`,
-    ``mat`` = (E, nu, sigma_y, K, n), history (4 * 5, STATE_SIZE), ``work`` from
+    ``mat`` = (E, nu, sigma_y, K, n[, MAT_J2]) or (E1, E2, nu12, G12, 0, MAT_ORTHOTROPIC),
+    ``axes`` (4, 5, 2) material axes from :func:`material_axes` (read by the
+    orthotropic law only), history (4 * 5, STATE_SIZE), ``work`` from
     :func:`work_arrays`.
     """
     E, nu, sigma_y, K, n = mat[0], mat[1], mat[2], mat[3], mat[4]
-    G = E / (2.0 * (1.0 + nu))
-    N, dN, g, f, P, eps, sig, Dm, w4, w44, tmp, mom, gam, gi_t, gz_t = work
+    G = shear_modulus(mat)
+    ortho = material_kind(mat) == MAT_ORTHOTROPIC
+    N, dN, g, f, P, eps, sig, Dm, w4, w44, tmp, mom, gam, gi_t, gz_t, Do = work
+    if ortho:
+        orthotropic_plane_stress_stiffness(mat[0], mat[1], mat[2], mat[3], Do)
     fe[:, :] = 0.0
     # MITC4 covariant transverse shear at the tying points (director length h0)
     for p in range(4):
@@ -257,7 +322,13 @@ def element_force(x, d, Jinv, dV, shear_ref, h0, h, mat, state_old, state_new, f
             C12 = np.dot(f[0], f[1])
             c1, c2, co, si = _hencky(C11, C22, C12, eps)
             k = gp * N_THICKNESS + z
-            j2_plane_stress(eps, state_old[k], E, nu, sigma_y, K, n, sig, Dm, state_new[k], w4, w44)
+            if ortho:
+                orthotropic_plane_stress(eps, axes[gp, z, 0], axes[gp, z, 1], Do, sig)
+                for i in range(STATE_SIZE):
+                    state_new[k, i] = state_old[k, i]
+            else:
+                j2_plane_stress(eps, state_old[k], E, nu, sigma_y, K, n, sig, Dm, state_new[k],
+                                w4, w44)
             S11, S22, S12 = _second_piola(sig, c1, c2, co, si)
             for i in range(3):
                 P[0, i] = S11 * f[0, i] + S12 * f[1, i]
@@ -375,8 +446,8 @@ def drilling(x, d, r, Jc, k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, rp, axis
 
 
 @njit(cache=True)
-def element_tangent(x, d, Jinv, dV, shear_ref, h0, h, mat, state_old, scratch, active, ke, fp, fm,
-                    xp, dp, axis, work):
+def element_tangent(x, d, Jinv, dV, shear_ref, h0, h, mat, axes, state_old, scratch, active, ke, fp,
+                    fm, xp, dp, axis, work):
     """Central-difference tangent ``ke`` (24, 24) of :func:`element_force`; columns of
     inactive DOFs (``active[j] == False``, held fixed) are left zero.  Central, not
     forward, differences: the O(h) error of the latter spoils Newton on thin shells,
@@ -400,7 +471,7 @@ def element_tangent(x, d, Jinv, dV, shear_ref, h0, h, mat, state_old, scratch, a
                 axis[:] = 0.0
                 axis[c - 3] = 1.0
                 rotate(d[a], axis, sign * FD_STEP, dp[a])
-            element_force(xp, dp, Jinv, dV, shear_ref, h0, h, mat, state_old, scratch,
+            element_force(xp, dp, Jinv, dV, shear_ref, h0, h, mat, axes, state_old, scratch,
                           fp if sign > 0 else fm, work)
         step = 2.0 * (hu if c < 3 else FD_STEP)
         for b in range(4):
@@ -433,7 +504,7 @@ def _gather(e, conn, x, Q, D, T0, xe, de, se):
 
 @njit(cache=True)
 def _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat,
-                           state_old, state_new, active, buf):
+                           axes, state_old, state_new, active, buf):
     """Force (buf[3]) and tangent (buf[4]) of element ``e`` incl. the drilling penalty."""
     (xe, de, se, fe, ke, fp, fm, xp, dp, sp_, axis, act, grad, omega, om_p, om_m,
      w3a, w3b, w3c, w43, scratch, work) = buf
@@ -441,28 +512,29 @@ def _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, 
     for a in range(4):
         for i in range(6):
             act[6 * a + i] = active[6 * conn[e, a] + i]
-    element_force(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, state_old[e], state_new[e],
-                  fe, work)
-    element_tangent(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, state_old[e], scratch, act,
-                    ke, fp, fm, xp, dp, axis, work)
-    k_d = DRILL_FACTOR * mat[0] / (2.0 * (1.0 + mat[1])) * h0 * area[e]
+    element_force(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, axes[e], state_old[e],
+                  state_new[e], fe, work)
+    element_tangent(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, axes[e], state_old[e],
+                    scratch, act, ke, fp, fm, xp, dp, axis, work)
+    k_d = DRILL_FACTOR * shear_modulus(mat) * h0 * area[e]
     drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_, axis,
              w3a, w3b, w3c, w43)
 
 
 @njit(cache=True)
-def assemble(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_old, state_new,
-             active, f, kdata):
+def assemble(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat, axes, state_old,
+             state_new, active, f, kdata):
     """Internal force ``f`` and element tangents ``kdata`` (n_el, 576) in the order of
     :func:`tangent_pattern`.  ``x`` (n_nodes, 3) current nodes, ``Q`` (n_nodes, 3, 3)
     nodal rotations, ``D`` (n_nodes, 3) reference directors, ``T0`` (n_el, 4, 3),
-    reference data per element, ``active`` (6 n_nodes,) DOFs that may move."""
+    reference data per element, ``axes`` (n_el, 4, 5, 2) material axes,
+    ``active`` (6 n_nodes,) DOFs that may move."""
     buf = _buffers()
     fe, ke = buf[3], buf[4]
     f[:] = 0.0
     for e in range(conn.shape[0]):
         _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h,
-                               mat, state_old, state_new, active, buf)
+                               mat, axes, state_old, state_new, active, buf)
         for a in range(4):
             for i in range(6):
                 f[6 * conn[e, a] + i] += fe[a, i]
@@ -472,7 +544,7 @@ def assemble(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state
 
 
 @njit(cache=True)
-def internal_force(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat, state_old,
+def internal_force(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat, axes, state_old,
                    state_new, f):
     """Internal force only (explicit dynamics): as :func:`assemble` without tangents.
     The drilling penalty force is included through its difference gradient."""
@@ -482,9 +554,9 @@ def internal_force(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat,
     f[:] = 0.0
     for e in range(conn.shape[0]):
         _gather(e, conn, x, Q, D, T0, xe, de, se)
-        element_force(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, state_old[e],
+        element_force(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, axes[e], state_old[e],
                       state_new[e], fe, work)
-        k_d = DRILL_FACTOR * mat[0] / (2.0 * (1.0 + mat[1])) * h0 * area[e]
+        k_d = DRILL_FACTOR * shear_modulus(mat) * h0 * area[e]
         drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_, axis,
                  w3a, w3b, w3c, w43)
         for a in range(4):
@@ -550,16 +622,36 @@ class Shell:
     ``hold(dofs)`` marks DOFs that never move (their tangent columns are skipped);
     ``contact`` = (nodes, axis, stiffness): penalty keeping x[nodes, axis] >= 0
     (a rigid plane, used for a mirror-symmetric self-contact).
+
+    Material: J2 with eq. 2 hardening from (E, nu, sigma_y, K, n), or, with
+    ``orthotropic=(E1, E2, nu12[, G12])`` (and E ... n omitted), the eq. 12
+    orthotropic elastic law; G12 defaults to the paper's
+    ``fabric_shear_modulus(E1, E2, nu12)``.  ``axis``: material direction 1, a
+    3-vector for all elements or an (n_el, 3) array, projected onto the shell's
+    tangent plane; default (None) the local x axis of each element (direction of
+    its first natural coordinate xi at the centre).  See also :meth:`orthotropic`.
     """
 
-    def __init__(self, X, conn, h0, E, nu, sigma_y, K, n, directors=None, contact=None):
+    def __init__(self, X, conn, h0, E=None, nu=None, sigma_y=None, K=None, n=None, directors=None,
+                 contact=None, *, orthotropic=None, axis=None):
         import scipy.sparse as sp  # local: the kernels above do not need it
 
         self._sp = sp
         self.X = np.ascontiguousarray(X, dtype=float)
         self.conn = np.ascontiguousarray(conn, dtype=np.int64)
         self.h0 = float(h0)
-        self.mat = np.array([E, nu, sigma_y, K, n], dtype=float)
+        if orthotropic is None:
+            if None in (E, nu, sigma_y, K, n):
+                raise ValueError("J2 material needs E, nu, sigma_y, K, n")
+            self.mat = np.array([E, nu, sigma_y, K, n, MAT_J2], dtype=float)
+        else:
+            if any(v is not None for v in (E, nu, sigma_y, K, n)):
+                raise ValueError("give either the J2 constants or orthotropic=(E1, E2, nu12[, G12])")
+            E1, E2, nu12 = (float(v) for v in orthotropic[:3])
+            G12 = float(orthotropic[3]) if len(orthotropic) > 3 else fabric_shear_modulus(E1, E2, nu12)
+            if min(E1, E2, G12) <= 0.0 or nu12 * nu12 * E2 / E1 >= 1.0:
+                raise ValueError("eq. 12 compliance is not positive definite")
+            self.mat = np.array([E1, E2, nu12, G12, 0.0, MAT_ORTHOTROPIC], dtype=float)
         n_nodes, n_el = self.X.shape[0], self.conn.shape[0]
         self.D = np.ascontiguousarray(nodal_normals(X, conn) if directors is None else directors,
                                       dtype=float)
@@ -572,6 +664,12 @@ class Shell:
         for e, nodes in enumerate(self.conn):
             self.area[e] = reference_element(self.X[nodes], self.D[nodes], self.h0, self.Jinv[e],
                                              self.dV[e], self.shear_ref[e], self.Jc[e], self.T0[e])
+        a1 = np.zeros((n_el, 3)) if axis is None else np.broadcast_to(
+            np.asarray(axis, dtype=float), (n_el, 3))
+        self.axes = np.empty((n_el, 4, N_THICKNESS, 2))
+        for e, nodes in enumerate(self.conn):
+            material_axes(self.X[nodes], self.D[nodes], self.h0, np.array(a1[e], dtype=float),
+                          self.axes[e])
         self.n_dof = DOF_PER_NODE * n_nodes
         self.active = np.ones(self.n_dof, dtype=np.bool_)
         self.contact = contact
@@ -584,6 +682,13 @@ class Shell:
         self._rows, self._cols = tangent_pattern(self.conn)
         self._f = np.zeros(self.n_dof)
         self._kdata = np.zeros((n_el, 576))
+
+    @classmethod
+    def orthotropic(cls, X, conn, h0, E1, E2, nu12, G12=None, axis=None, directors=None,
+                    contact=None):
+        """Shell of the eq. 12 orthotropic elastic material (G12 default: Sec. 4.2.2 rule)."""
+        props = (E1, E2, nu12) if G12 is None else (E1, E2, nu12, G12)
+        return cls(X, conn, h0, directors=directors, contact=contact, orthotropic=props, axis=axis)
 
     @property
     def u(self):
@@ -599,8 +704,8 @@ class Shell:
 
     def tangent_and_force(self):
         assemble(self.conn, self.x, self.Q, self.D, self.T0, self.Jinv, self.dV, self.shear_ref,
-                 self.Jc, self.area, self.h0, self.h, self.mat, self.state, self._trial, self.active,
-                 self._f, self._kdata)
+                 self.Jc, self.area, self.h0, self.h, self.mat, self.axes, self.state, self._trial,
+                 self.active, self._f, self._kdata)
         K = self._sp.coo_matrix((self._kdata.ravel(), (self._rows, self._cols)),
                                 shape=(self.n_dof, self.n_dof)).tocsr()
         if self.contact is not None:
@@ -610,8 +715,8 @@ class Shell:
     def internal_force(self):
         """Internal force at the trial configuration, without tangent (explicit use)."""
         internal_force(self.conn, self.x, self.Q, self.D, self.T0, self.Jinv, self.dV,
-                       self.shear_ref, self.Jc, self.area, self.h0, self.h, self.mat, self.state,
-                       self._trial, self._f)
+                       self.shear_ref, self.Jc, self.area, self.h0, self.h, self.mat, self.axes,
+                       self.state, self._trial, self._f)
         return self._f
 
     def _contact(self, f):
