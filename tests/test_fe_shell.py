@@ -278,3 +278,25 @@ def test_orthotropic_explicit_force_matches_implicit_and_keeps_thickness():
     assert np.allclose(model.h, 0.3)
     with pytest.raises(ValueError):
         Shell(X, conn, 0.3, 1000.0, 0.3, 5.0, 10.0, 0.5, orthotropic=FABRIC)
+
+
+@pytest.mark.parametrize("axis, modulus, nu", [(None, FABRIC[0], FABRIC[2]),
+                                               ((0.0, 1.0, 0.0), FABRIC[1], FABRIC[2] * FABRIC[1] / FABRIC[0])])
+def test_orthotropic_strip_finite_stretch_newton(axis, modulus, nu):
+    """Implicit (Newton) path at finite strain, uniaxial along a material axis: Kirchhoff
+    stress E ln(lambda) on the Hencky strain, lateral log strain -nu ln(lambda), thickness
+    kept at h0, hence F = E ln(lambda) W t / lambda."""
+    L, W, t, U = 10.0, 2.0, 0.3, 3.0
+    X, conn = grid(np.linspace(0, L, 5), np.linspace(0, W, 3))
+    model = Shell.orthotropic(X, conn, t, *FABRIC, axis=axis)
+    left, right = np.flatnonzero(X[:, 0] == 0), np.flatnonzero(X[:, 0] == L)
+    fixed = np.concatenate([dofs(left, [0]), dofs(left[0], [1]),
+                            dofs(np.arange(len(X)), [2, 3, 4, 5])])
+    model.hold(fixed)
+    hist = solve(model, fixed, dofs(right, [0]), [U] * len(right), controls=Controls(n_steps=6))
+    top = np.flatnonzero(X[:, 1] == W)
+    for lam, force in zip(hist.lam[1:], hist.reaction[1:]):
+        stretch = 1 + lam * U / L
+        assert force == pytest.approx(modulus * np.log(stretch) * W * t / stretch, rel=1e-4)
+    assert model.x[top, 1].mean() == pytest.approx(W * np.exp(-nu * np.log(1 + U / L)), rel=1e-6)
+    assert np.allclose(model.h, t)
