@@ -1,0 +1,82 @@
+"""Explicit central difference (Sec. 4.1, eq. 11) on the pinned three-point beam."""
+import time
+
+import numpy as np
+import pytest
+
+import harnesspipe  # noqa: F401
+from harnesspipe import rom
+from harnesspipe.fe.explicit import (BeamExplicit, ExplicitError, ExplicitSettings, run_explicit,
+                                     smooth_step, stable_step, wave_step)
+from harnesspipe.models.rom_beam import BeamSystem, Material, Mesh
+
+E, NU, RADIUS, SPAN, DEFL = 20.0, 0.39, 7.0, 127.0, 5.0
+RHO = 2.0e-9       # t/mm^3
+F_M = 25.0         # mass scaling (the paper's value)
+NE = 20
+
+
+def pinned_beam(ne=NE):
+    """The pinned ROM set-up of rom_beam._pinned: planar, midspan deflection prescribed."""
+    X = np.zeros((ne + 1, 3))
+    X[:, 0] = np.linspace(0.0, SPAN, ne + 1)
+    mid = ne // 2
+    load_dof = 6 * mid + 1
+    planar = [6 * k + c for k in range(ne + 1) for c in (2, 3, 4)]
+    fixed = planar + [0, 1, 6 * ne + 1, load_dof]
+    system = BeamSystem(X, Material(E=E, nu=NU), RADIUS, Mesh(n_elements=ne), fixed,
+                        prescribed={load_dof: -DEFL})
+    return system, load_dof
+
+
+def first_period():
+    """Simply supported Euler-Bernoulli beam, scaled density."""
+    r_g = RADIUS / 2.0
+    omega = (np.pi / SPAN) ** 2 * r_g * np.sqrt(E / (F_M * RHO))
+    return 2.0 * np.pi / omega
+
+
+def test_smooth_step_and_eq11():
+    assert smooth_step(0.0) == (0.0, 0.0, 0.0) and smooth_step(1.0) == (1.0, 0.0, 0.0)
+    s, ds, d2s = smooth_step(0.5)
+    assert s == pytest.approx(0.5) and ds == pytest.approx(1.875) and d2s == pytest.approx(0.0)
+    h = 1e-6
+    assert ds == pytest.approx((smooth_step(0.5 + h)[0] - smooth_step(0.5 - h)[0]) / (2 * h))
+    c_d = np.sqrt(E * (1 - NU) / (F_M * RHO * (1 + NU) * (1 - 2 * NU)))
+    assert wave_step(2.0, E, NU, F_M * RHO) == pytest.approx(2.0 / c_d)
+
+
+def test_pinned_beam_quasi_static_matches_rom():
+    system, load_dof = pinned_beam()
+    problem = BeamExplicit(system, RHO, F_M)
+    T = 40.0 * first_period()   # KE/IE of the ramp itself ~ (T1/T)^2
+    t0 = time.perf_counter()
+    res = run_explicit(problem, T)
+    elapsed = time.perf_counter() - t0
+    # the bending limit governs this thick, fine beam (documented in fe/explicit.py)
+    assert res.dt_beam < res.dt_wave
+    assert res.dt <= 0.9 * min(res.dt_wave, res.dt_beam) * (1 + 1e-12)
+    force = -res.reactions[load_dof]
+    ref = rom.three_point(E=E, radius=RADIUS, supports="pinned", deflection=DEFL, elastic=True)
+    f_ref = float(ref["force_N"].iloc[-1])
+    print(f"explicit {force:.5f} N vs static {f_ref:.5f} N; steps {res.n_steps}, dt {res.dt:.3e}"
+          f" (wave {res.dt_wave:.3e}, beam {res.dt_beam:.3e}); KE/IE {res.max_ke_ie:.2e}; "
+          f"balance {res.max_balance_error:.2e}; {elapsed:.2f} s")
+    assert force == pytest.approx(f_ref, rel=0.02)
+    assert res.max_ke_ie < 0.02
+    assert res.balance_error < 0.01 and res.max_balance_error < 0.01
+    assert res.w_ext > 0.0 and res.ie == pytest.approx(res.w_ext, rel=0.01)
+    assert system.u[load_dof // 6, 1] == pytest.approx(-DEFL)
+
+
+def test_absurd_step_stops_with_clear_error():
+    system, _ = pinned_beam()
+    problem = BeamExplicit(system, RHO, F_M)
+    T = 20.0 * first_period()
+    res_dt = 0.9 * min(*stable_step(problem))
+    with pytest.raises(ExplicitError) as exc:
+        run_explicit(problem, T, ExplicitSettings(dt=50.0 * res_dt))
+    msg = str(exc.value)
+    assert "explicit run stopped" in msg and "step" in msg and "KE" in msg and "IE" in msg
+    assert exc.value.step < 1000
+    print(msg)
