@@ -13,12 +13,11 @@ import argparse
 import os
 import platform
 import statistics
-import tempfile
 import time
 
 import numpy as np
 
-from benchlib import fresh_process_seconds, write_section
+from benchlib import jit_seconds, write_section
 
 HEADING = "## Branch Y-harness ROM"
 FIRST_CALL = ("import time; t = time.perf_counter(); from harnesspipe.models import branch; "
@@ -53,9 +52,8 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=10)
     args = parser.parse_args()
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-    with tempfile.TemporaryDirectory() as cache:
-        cold = fresh_process_seconds(FIRST_CALL, cache)[0]
-        cached = fresh_process_seconds(FIRST_CALL, cache)[0]
+    cold, cached = jit_seconds(FIRST_CALL)
+    cold, cached = cold[0], cached[0]
     warm = warm_median(args.repeat)
     slow = alpha_effect(rate=1.0, dt_min=0.02)
     fast = alpha_effect(rate=50.0, dt_min=0.0004)

@@ -18,13 +18,12 @@ import argparse
 import os
 import platform
 import statistics
-import tempfile
 import time
 
 import numpy as np
 
 CLOSED = dict(E=15.7, sigma_y=0.6, K=1.59, n=0.3, radius=7.05)  # Table 3, closed tube
-from benchlib import fresh_process_seconds, write_section
+from benchlib import jit_seconds, write_section
 
 HEADING = "## ROM three-point"
 FIRST_CALL = ("import time; t = time.perf_counter(); from harnesspipe import rom; "
@@ -142,9 +141,8 @@ def main() -> None:
     args = ap.parse_args()
     import numba
     numba.set_num_threads(1)
-    with tempfile.TemporaryDirectory() as cache:
-        cold = fresh_process_seconds(FIRST_CALL, cache)[0]
-        cached = fresh_process_seconds(FIRST_CALL, cache)[0]
+    cold, cached = jit_seconds(FIRST_CALL)
+    cold, cached = cold[0], cached[0]
     warm, warm_cpu, curve = warm_median(args.repeat)
     coarse, coarse_cpu, coarse_curve = warm_median(args.repeat, **COARSE)
     from harnesspipe import rom

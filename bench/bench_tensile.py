@@ -18,12 +18,11 @@ from __future__ import annotations
 import argparse
 import platform
 import statistics
-import tempfile
 import time
 
 import numpy as np
 
-from benchlib import fresh_process_seconds, write_section
+from benchlib import jit_seconds, write_section
 
 HEADING = "## Tensile"
 TABLE2 = {"closed_tube": (1559.0, 8.6, 25.6, 0.12), "open_tube": (698.0, 8.8, 23.1, 0.83),
@@ -98,9 +97,7 @@ def main() -> None:
     args = ap.parse_args()
     import numba
     numba.set_num_threads(1)
-    with tempfile.TemporaryDirectory() as cache:
-        cold = fresh_process_seconds(FIRST_CALL, cache)
-        cached = fresh_process_seconds(FIRST_CALL, cache)
+    cold, cached = jit_seconds(FIRST_CALL)
     sims = [f"- {c}, {p}: {1e3 * warm_median(c, p, args.repeat):.1f} ms"
             for c in TABLE2 for p in ("quick", "default")]
     cals = [calibration(c) for c in TABLE2]

@@ -4,6 +4,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent / "RESULTS.md"
@@ -16,6 +17,13 @@ def fresh_process_seconds(script: str, cache: str) -> list[float]:
     out = subprocess.run([sys.executable, "-c", script], env=env, check=True,
                          capture_output=True, text=True)
     return [float(v) for v in out.stdout.strip().splitlines()[-1].split()]
+
+
+def jit_seconds(script: str) -> tuple[list[float], list[float]]:
+    """(first calls with an empty Numba cache, first calls loading from that cache)."""
+    with tempfile.TemporaryDirectory() as cache:
+        cold = fresh_process_seconds(script, cache)
+        return cold, fresh_process_seconds(script, cache)
 
 
 def write_section(heading: str, text: str) -> None:
