@@ -1,0 +1,110 @@
+"""Parallel explicit beam kernels against the assembled co-rotational beam."""
+import numpy as np
+import pytest
+
+from harnesspipe.fe.beam import assemble_beams, initial_frames, lobatto_points
+from harnesspipe.fe.beam_explicit import (beam_forces, beam_lumped_mass, beam_plastic_work,
+                                          beam_stable_step)
+from harnesspipe.fe.fiber import disc_fibres
+from harnesspipe.fe.rotation import rotate_nodes
+
+
+def _two_wires(n_el=8, length=40.0):
+    """Two straight wires along x (radii 0.7 and 0.6), 1 mm apart in y."""
+    xs = np.linspace(0.0, length, n_el + 1)
+    X = np.vstack([np.c_[xs, np.zeros_like(xs), np.zeros_like(xs)],
+                   np.c_[xs, np.ones_like(xs), np.zeros_like(xs)]])
+    c = np.c_[np.arange(n_el), np.arange(1, n_el + 1)]
+    conn = np.vstack([c, c + n_el + 1]).astype(np.int64)
+    return X, conn
+
+
+def _deform(X, seed=3):
+    rng = np.random.default_rng(seed)
+    u = np.zeros_like(X)
+    u[:, 1] = 0.4 * np.sin(X[:, 0] / 9.0)
+    u[:, 2] = 0.2 * np.cos(X[:, 0] / 7.0)
+    u[:, 0] = 0.05 * X[:, 0] / 40.0
+    quat = np.zeros((X.shape[0], 4))
+    quat[:, 0] = 1.0
+    rotate_nodes(quat, rng.normal(scale=0.05, size=(X.shape[0], 3)))
+    return u, quat
+
+
+def test_parallel_forces_equal_assembled_beams_per_body():
+    X, conn = _two_wires()
+    R0 = initial_frames(X, conn)
+    u, quat = _deform(X)
+    xi, w = lobatto_points(3)
+    secs = [disc_fibres(r, 3, 8) for r in (0.7, 0.6)]
+    mats = np.array([[4528.0, 4.52, 1327.0, 0.9], [5641.0, 4.95, 850.0, 0.78]])
+    GJ = np.array([80.0, 50.0])
+    n_el = conn.shape[0]
+    half = n_el // 2
+    sec_id = np.repeat([0, 1], half).astype(np.int64)
+    ng, nf = xi.size, secs[0][0].size
+    hist = [np.zeros((n_el, ng, nf)) for _ in range(4)]
+    f_el = np.zeros((n_el, 12))
+    f_int = np.zeros((X.shape[0], 6))
+    sec = [np.ascontiguousarray(np.stack([s[k] for s in secs])) for k in range(3)]
+    beam_forces(X, conn, R0, X + u, quat, xi, w, sec[0], sec[1], sec[2], GJ, sec_id,
+                mats, sec_id.copy(), *hist, f_el, f_int, 2)
+    for body in (0, 1):
+        sl = slice(body * half, (body + 1) * half)
+        h = [np.zeros((half, ng, nf)) for _ in range(4)]
+        f = np.zeros(6 * X.shape[0])
+        band = np.zeros((1, 1))
+        y, z, a = secs[body]
+        assemble_beams(X, conn[sl], R0[sl], u, quat, xi, w, y, z, a, GJ[body], *mats[body],
+                       False, *h, False, f, band, 0)
+        nodes = np.unique(conn[sl])
+        np.testing.assert_allclose(f_int[nodes].ravel(), f.reshape(-1, 6)[nodes].ravel(),
+                                   rtol=1e-12, atol=1e-10)
+        np.testing.assert_array_equal(hist[3][sl], h[3])
+    assert np.abs(f_int).max() > 1.0            # the state is strained (yielded)
+    assert hist[3].max() > 0.0
+    W = beam_plastic_work(conn, X, w, sec[2], sec_id, mats, sec_id, hist[3])
+    assert W > 0.0
+
+
+def test_lumped_mass_total_and_stable_step_bounds_a_free_vibration():
+    E, rho, r, length, n_el = 4528.0, 25 * 4.34e-9, 0.7, 40.0, 8
+    A, I = np.pi * r**2, np.pi * r**4 / 4
+    xs = np.linspace(0.0, length, n_el + 1)
+    X = np.c_[xs, np.zeros_like(xs), np.zeros_like(xs)]
+    conn = np.c_[np.arange(n_el), np.arange(1, n_el + 1)].astype(np.int64)
+    m = np.zeros((X.shape[0], 6))
+    beam_lumped_mass(X, conn, np.full(n_el, A), np.full(n_el, I), np.full(n_el, rho), m)
+    assert m[:, 0].sum() == pytest.approx(rho * A * length)
+    l = np.full(n_el, length / n_el)
+    dt_e = beam_stable_step(l, A, I, E, E / 2.78, rho).min()
+    assert dt_e <= l[0] / np.sqrt(E / rho) * (1 + 1e-12)   # never above the bar limit l/c
+
+    def run(dt, steps=3000):
+        xi, w = lobatto_points(3)
+        y, z, a = disc_fibres(r, 3, 8)
+        sec = [np.ascontiguousarray(v[None, :]) for v in (y, z, a)]
+        mats = np.array([[E, 1e9, 0.0, 1.0]])
+        ids = np.zeros(n_el, dtype=np.int64)
+        R0 = initial_frames(X, conn)
+        hist = [np.zeros((n_el, 3, y.size)) for _ in range(4)]
+        x = X.copy()
+        quat = np.zeros((X.shape[0], 4))
+        quat[:, 0] = 1.0
+        rng = np.random.default_rng(0)
+        v = rng.normal(scale=1.0, size=m.shape)        # all modes excited
+        f_el = np.zeros((n_el, 12))
+        f = np.zeros_like(m)
+        for _ in range(steps):
+            f[:] = 0.0
+            beam_forces(X, conn, R0, x, quat, xi, w, *sec, np.array([E / 2.78 * 2 * I]), ids,
+                        mats, ids, *hist, f_el, f, 2)
+            v -= dt * f / m
+            x += dt * v[:, :3]
+            rotate_nodes(quat, np.ascontiguousarray(dt * v[:, 3:]))
+            if not np.all(np.isfinite(x)) or np.abs(x - X).max() > 1e3:
+                return False
+        return True
+
+    assert run(0.9 * dt_e)
+    assert not run(2.5 * dt_e)
