@@ -1,0 +1,1066 @@
+"""Contact, friction and cohesive kernels of the explicit high-fidelity bundle model (Sec. 4.1).
+
+Interactions of the 3-point bending model of a wire bundle (eqs. 6-10):
+
+(a) ``beam_beam_contact``     wire-wire, penalty normal + eq. 6 friction;
+(b) ``node_cylinder_contact`` nodes against rigid cylinders (rollers, loading pin),
+                              constant-mu Coulomb per node, reaction on each cylinder;
+(c) ``node_facet_contact``    nodes (wires) against shell quads (tube, tape), one-sided,
+                              eq. 6 friction;
+(d) ``cohesive_ties_quad`` / ``cohesive_ties_seg``  tape bonded to the tube / the wires by
+                              the damaged cohesive law of eqs. 7-10 (fixed node-to-point ties);
+(e) ``make_ties``             Python helper building the ties from the initial geometry.
+
+Conventions.  Units mm, N, s.  ``x`` (n_nodes, 3+) current positions, ``v``
+(n_nodes, 3+) current half-step velocities (translations in [:, :3]), so that the
+increment of the step that led to ``x`` is ``v dt``.  Force arrays are (n_nodes, 6+):
+every kernel ADDS the forces acting ON the nodes into them, normal (penalty) forces in
+``f_n``, tangential friction forces in ``f_t`` and cohesive forces in their own array
+``f_c`` (so that the caller can account the work of each; frictional dissipation is the
+work of ``f_t``).  Pair loops run in ``prange`` into per-pair arrays, then a serial
+scatter adds them to the nodes (no races).
+
+History.  Each call is one committed explicit step: friction and cohesive history
+arrays are updated IN PLACE.  Do not call a kernel twice for the same step.
+
+* Slot arrays (wire-wire, node-facet): ``hist_partner`` (n_owner, MAXS) int64, -1 for a
+  free slot, else the partner id (segment / quad); ``hist_ft`` (n_owner, MAXS, ..., 3)
+  the committed elastic tangential (friction) force per unit weight of the contact point,
+  a global vector.  Allocate with :func:`new_slot_history`.  After each call the slots
+  hold exactly the contacts active in that call (an inactive pair forgets its friction).
+  A contact whose partner changes to an ADJACENT element (shares a node: sliding onto the
+  next element) inherits the old partner's force.  At most MAXS partners per owner are
+  remembered (an overflowing contact still acts, but restarts from zero friction).
+* Friction force at the current step: ``f_old`` is rotated onto the current tangent
+  plane (projected and rescaled to keep its magnitude), then
+  ``rate_dependent_friction`` / ``coulomb_return_map`` of :mod:`harnesspipe.fe.friction`.
+* Eq. 6 rate in physical time: ``dt_phys = dt * time_scale`` with ``time_scale`` =
+  physical duration / simulated duration; the slip rate is ``|dg_t| / dt_phys``.
+
+Normal law everywhere: ``p = k_n max(-gap, 0)`` (linear penalty, no contact damping).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from harnesspipe.fe.cohesive import cohesive_dissipated_energy, cohesive_traction
+from harnesspipe.fe.friction import coulomb_return_map, rate_dependent_friction
+from harnesspipe.fe.spatial_hash import box_pairs, node_aabbs, quad_aabbs, segment_aabbs
+
+PARALLEL_COS = 0.98     # |cos| of two segments above which wire-wire uses the parallel rule
+EDGE_TOL = 0.05         # half width (in xi) of the partition-of-unity band at quad edges
+DEFAULT_MAXS = 8
+
+
+def new_slot_history(n_owner, maxs=DEFAULT_MAXS, points=1):
+    """Empty slot history: ``hist_partner`` (n_owner, maxs) = -1 and ``hist_ft``.
+
+    ``points=2`` for wire-wire (``hist_ft`` (n_seg, maxs, 2, 3)); ``points=1`` for
+    node-facet (``hist_ft`` (n_nodes_list, maxs, 3)).
+    """
+    hp = -np.ones((n_owner, maxs), dtype=np.int64)
+    if points == 1:
+        return hp, np.zeros((n_owner, maxs, 3))
+    return hp, np.zeros((n_owner, maxs, points, 3))
+
+
+# ----------------------------------------------------------------------------- helpers
+@njit(cache=True, inline="always")
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@njit(cache=True)
+def _rotate_onto_plane(f, n):
+    """Project ``f`` (3,) onto the plane normal to unit ``n`` keeping |f| (in place)."""
+    m0 = math.sqrt(_dot(f, f))
+    if m0 == 0.0:
+        return
+    fn = _dot(f, n)
+    for k in range(3):
+        f[k] -= fn * n[k]
+    m1 = math.sqrt(_dot(f, f))
+    if m1 < 1e-12 * m0:
+        for k in range(3):
+            f[k] = 0.0
+        return
+    for k in range(3):
+        f[k] *= m0 / m1
+
+
+@njit(cache=True)
+def _any_perpendicular(d, out):
+    """A unit vector normal to ``d``."""
+    ax = 0
+    if abs(d[1]) < abs(d[ax]):
+        ax = 1
+    if abs(d[2]) < abs(d[ax]):
+        ax = 2
+    e0 = 1.0 if ax == 0 else 0.0
+    e1 = 1.0 if ax == 1 else 0.0
+    e2 = 1.0 if ax == 2 else 0.0
+    out[0] = d[1] * e2 - d[2] * e1
+    out[1] = d[2] * e0 - d[0] * e2
+    out[2] = d[0] * e1 - d[1] * e0
+    m = math.sqrt(_dot(out, out))
+    for k in range(3):
+        out[k] /= m
+
+
+@njit(cache=True)
+def _share_node(conn, a, b):
+    for i in range(conn.shape[1]):
+        for j in range(conn.shape[1]):
+            if conn[a, i] == conn[b, j]:
+                return True
+    return False
+
+
+@njit(cache=True)
+def _find_slot(hist_partner, conn, owner, partner):
+    """Slot of ``partner`` in the owner's row, else of an element adjacent to it, else -1."""
+    maxs = hist_partner.shape[1]
+    for s in range(maxs):
+        if hist_partner[owner, s] == partner:
+            return s
+    for s in range(maxs):
+        q = hist_partner[owner, s]
+        if q >= 0 and _share_node(conn, q, partner):
+            return s
+    return -1
+
+
+@njit(cache=True)
+def _free_slot(hist_partner, owner):
+    for s in range(hist_partner.shape[1]):
+        if hist_partner[owner, s] < 0:
+            return s
+    return -1
+
+
+@njit(cache=True)
+def _quad_eval(x, quads, q, xi, eta, X, n, e1):
+    """Point X, unit normal n = unit(X_xi x X_eta) and unit tangent e1 = unit(X_xi) (into X, n, e1)."""
+    for k in range(3):
+        X[k] = 0.0
+        n[k] = 0.0
+        e1[k] = 0.0
+    for m in range(4):
+        sx = -1.0 if (m == 0 or m == 3) else 1.0
+        se = -1.0 if (m == 0 or m == 1) else 1.0
+        Nm = 0.25 * (1 + sx * xi) * (1 + se * eta)
+        dx = 0.25 * sx * (1 + se * eta)
+        de = 0.25 * se * (1 + sx * xi)
+        for k in range(3):
+            c = x[quads[q, m], k]
+            X[k] += Nm * c
+            e1[k] += dx * c
+            n[k] += de * c          # X_eta kept in n for now
+    c0 = e1[1] * n[2] - e1[2] * n[1]
+    c1 = e1[2] * n[0] - e1[0] * n[2]
+    c2 = e1[0] * n[1] - e1[1] * n[0]
+    nn = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+    n[0] = c0 / nn
+    n[1] = c1 / nn
+    n[2] = c2 / nn
+    le = math.sqrt(_dot(e1, e1))
+    for k in range(3):
+        e1[k] /= le
+
+
+def quad_point(x, quads, q, xi, eta):
+    """Point, unit normal (X_xi x X_eta) and unit tangent X_xi of quad q at (xi, eta)."""
+    X = np.empty(3)
+    n = np.empty(3)
+    e1 = np.empty(3)
+    _quad_eval(np.asarray(x, dtype=float), np.asarray(quads, dtype=np.int64), q, xi, eta, X, n, e1)
+    return X, n, e1
+
+
+@njit(cache=True)
+def _project_quad(x, quads, q, p, clamp, out):
+    """Closest point parameters of point p on quad q by Gauss-Newton (at most 7 iterations).
+
+    ``clamp``: keep (xi, eta) in [-1, 1]^2 (projected iterations).  Writes
+    out = (xi, eta, X(3), n(3)) as out[0:2], out[2:5], out[5:8]; unit normal X_xi x X_eta.
+    """
+    xi = 0.0
+    eta = 0.0
+    X0 = x[quads[q, 0]]
+    X1 = x[quads[q, 1]]
+    X2 = x[quads[q, 2]]
+    X3 = x[quads[q, 3]]
+    done = False
+    for it in range(8):
+        a0 = 0.25 * (1 - xi) * (1 - eta)
+        a1 = 0.25 * (1 + xi) * (1 - eta)
+        a2 = 0.25 * (1 + xi) * (1 + eta)
+        a3 = 0.25 * (1 - xi) * (1 + eta)
+        bx0 = -0.25 * (1 - eta)
+        bx1 = 0.25 * (1 - eta)
+        bx2 = 0.25 * (1 + eta)
+        bx3 = -0.25 * (1 + eta)
+        be0 = -0.25 * (1 - xi)
+        be1 = -0.25 * (1 + xi)
+        be2 = 0.25 * (1 + xi)
+        be3 = 0.25 * (1 - xi)
+        Xs0 = a0 * X0[0] + a1 * X1[0] + a2 * X2[0] + a3 * X3[0]
+        Xs1 = a0 * X0[1] + a1 * X1[1] + a2 * X2[1] + a3 * X3[1]
+        Xs2 = a0 * X0[2] + a1 * X1[2] + a2 * X2[2] + a3 * X3[2]
+        tx0 = bx0 * X0[0] + bx1 * X1[0] + bx2 * X2[0] + bx3 * X3[0]
+        tx1 = bx0 * X0[1] + bx1 * X1[1] + bx2 * X2[1] + bx3 * X3[1]
+        tx2 = bx0 * X0[2] + bx1 * X1[2] + bx2 * X2[2] + bx3 * X3[2]
+        te0 = be0 * X0[0] + be1 * X1[0] + be2 * X2[0] + be3 * X3[0]
+        te1 = be0 * X0[1] + be1 * X1[1] + be2 * X2[1] + be3 * X3[1]
+        te2 = be0 * X0[2] + be1 * X1[2] + be2 * X2[2] + be3 * X3[2]
+        if done or it == 7:
+            break
+        r0 = p[0] - Xs0
+        r1 = p[1] - Xs1
+        r2 = p[2] - Xs2
+        A = tx0 * tx0 + tx1 * tx1 + tx2 * tx2
+        B = tx0 * te0 + tx1 * te1 + tx2 * te2
+        C = te0 * te0 + te1 * te1 + te2 * te2
+        g0 = tx0 * r0 + tx1 * r1 + tx2 * r2
+        g1 = te0 * r0 + te1 * r1 + te2 * r2
+        det = A * C - B * B
+        if det <= 0.0:
+            break
+        dxi = (C * g0 - B * g1) / det
+        deta = (A * g1 - B * g0) / det
+        xi += dxi
+        eta += deta
+        if clamp:
+            xi = min(1.0, max(-1.0, xi))
+            eta = min(1.0, max(-1.0, eta))
+        else:   # keep the iteration bounded for far-off points
+            xi = min(3.0, max(-3.0, xi))
+            eta = min(3.0, max(-3.0, eta))
+        done = abs(dxi) + abs(deta) < 1e-10   # refresh the point once more, then stop
+    out[0] = xi
+    out[1] = eta
+    out[2] = Xs0
+    out[3] = Xs1
+    out[4] = Xs2
+    n0 = tx1 * te2 - tx2 * te1
+    n1 = tx2 * te0 - tx0 * te2
+    n2 = tx0 * te1 - tx1 * te0
+    nn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    out[5] = n0 / nn
+    out[6] = n1 / nn
+    out[7] = n2 / nn
+
+
+@njit(cache=True, inline="always")
+def _ramp(u):
+    """Partition-of-unity weight across a quad edge: 1 inside, 1/2 on the edge, 0 beyond."""
+    a = abs(u)
+    if a <= 1.0 - EDGE_TOL:
+        return 1.0
+    if a >= 1.0 + EDGE_TOL:
+        return 0.0
+    return 0.5 * (1.0 + EDGE_TOL - a) / EDGE_TOL
+
+
+# ---------------------------------------------------------------- (a) wire-wire contact
+@njit(cache=True)
+def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out):
+    """Contact points of segments a, b: returns their number (1 crossing, 2 parallel, 0 none).
+
+    Crossing (|cos| <= PARALLEL_COS): the closest points of the two segments (clamped),
+    weight 1, halved at an end node shared with another segment (that segment finds the
+    same point).  Parallel: the two ends of the common part of the segments projected on
+    a's axis, each paired with its closest point on b, weight  L_overlap / (L_a + L_b)
+    each (the pair carries  k_n * mean penetration * L_overlap / L_mean; for equal aligned
+    chains every node-to-node line carries k_n * penetration).
+    """
+    a0 = seg[a, 0]
+    a1 = seg[a, 1]
+    b0 = seg[b, 0]
+    b1 = seg[b, 1]
+    da0 = x[a1, 0] - x[a0, 0]
+    da1 = x[a1, 1] - x[a0, 1]
+    da2 = x[a1, 2] - x[a0, 2]
+    db0 = x[b1, 0] - x[b0, 0]
+    db1 = x[b1, 1] - x[b0, 1]
+    db2 = x[b1, 2] - x[b0, 2]
+    r0 = x[a0, 0] - x[b0, 0]
+    r1 = x[a0, 1] - x[b0, 1]
+    r2 = x[a0, 2] - x[b0, 2]
+    A = da0 * da0 + da1 * da1 + da2 * da2
+    E = db0 * db0 + db1 * db1 + db2 * db2
+    B = da0 * db0 + da1 * db1 + da2 * db2
+    C = da0 * r0 + da1 * r1 + da2 * r2
+    F = db0 * r0 + db1 * r1 + db2 * r2
+    La = math.sqrt(A)
+    Lb = math.sqrt(E)
+    cosab = abs(B) / (La * Lb)
+    if cosab <= PARALLEL_COS:
+        denom = A * E - B * B
+        s = min(1.0, max(0.0, (B * F - C * E) / denom))
+        u = (B * s + F) / E
+        if u < 0.0:
+            u = 0.0
+            s = min(1.0, max(0.0, -C / A))
+        elif u > 1.0:
+            u = 1.0
+            s = min(1.0, max(0.0, (B - C) / A))
+        w = 1.0
+        if (s == 0.0 and valence[a0] > 1) or (s == 1.0 and valence[a1] > 1):
+            w *= 0.5
+        if (u == 0.0 and valence[b0] > 1) or (u == 1.0 and valence[b1] > 1):
+            w *= 0.5
+        s_out[0] = s
+        u_out[0] = u
+        w_out[0] = w
+        return 1
+    # parallel: common part on a's axis
+    sb0 = -C / A                      # b0 on a: (b0 - a0).da / A
+    sb1 = (B - C) / A                 # b1 on a
+    lo = max(0.0, min(sb0, sb1))
+    hi = min(1.0, max(sb0, sb1))
+    if hi < lo:
+        return 0
+    w = (hi - lo) * La / (La + Lb)
+    if w <= 0.0:
+        return 0
+    for k in range(2):
+        s = lo if k == 0 else hi
+        # point of a at s, projected on b
+        u = (F + s * B) / E
+        s_out[k] = s
+        u_out[k] = min(1.0, max(0.0, u))
+        w_out[k] = w
+    return 2
+
+
+@njit(cache=True, parallel=True)
+def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d_c, dt,
+                      time_scale, hist_partner, hist_ft, f_n, f_t):
+    """Wire-wire penalty contact with eq. 6 friction between 2-node beam segments.
+
+    Parameters
+    ----------
+    x, v : (n_nodes, 3+) positions, half-step velocities.
+    seg : (n_seg, 2) node ids of the segments; seg_r : (n_seg,) radii (mm);
+    seg_body : (n_seg,) wire id (segments of one wire never contact each other).
+    pairs : (n_pairs, 2) candidate segment pairs (e.g. ``box_pairs(.., same_set=True)``
+        on ``segment_aabbs``); the owner of a pair's history is ``min(a, b)``.
+    k_n : normal penalty (N/mm per unit weight of a contact point);
+    k_t : tangential (stick) penalty (N/mm), 0 disables friction.
+    mu_s, mu_k, d_c : eq. 6 (d_c in s of PHYSICAL time).
+    dt : solver step; time_scale : physical / simulated duration (dt_phys = dt time_scale).
+    hist_partner : (n_seg, MAXS) int64; hist_ft : (n_seg, MAXS, 2, 3) friction history
+        per (owner, partner slot, contact point 0/1), in place (``new_slot_history(n_seg,
+        maxs, points=2)``).
+    f_n, f_t : (n_nodes, 3+) outputs, normal and friction forces ADDED.
+
+    Geometry: gap ``|p_a - p_b| - r_a - r_b`` at the contact points of
+    :func:`_segment_points` (closest points for crossing segments; for nearly parallel
+    segments, |cos| > PARALLEL_COS, the two ends of their common part, node-to-segment
+    like, which is well posed and continuous under tangential motion).  Point forces go
+    to the end nodes by the linear shape functions ``(1 - s, s)``.
+
+    Returns the number of pairs with at least one active contact point.
+    """
+    n_pairs = pairs.shape[0]
+    n_nodes = x.shape[0]
+    valence = np.zeros(n_nodes, dtype=np.int64)
+    for e in range(seg.shape[0]):
+        valence[seg[e, 0]] += 1
+        valence[seg[e, 1]] += 1
+    npt = np.zeros(n_pairs, dtype=np.int64)
+    act = np.zeros((n_pairs, 2), dtype=np.bool_)
+    ps = np.zeros((n_pairs, 2))
+    pu = np.zeros((n_pairs, 2))
+    pw = np.zeros((n_pairs, 2))
+    pfn = np.zeros((n_pairs, 2, 3))     # weighted normal force on a's point
+    pft = np.zeros((n_pairs, 2, 3))     # weighted friction force on a's point
+    hnew = np.zeros((n_pairs, 2, 3))    # new friction history (per unit weight)
+    scr = np.zeros((n_pairs, 5, 3))     # scratch: f_old, dg, ds, n, (unused)
+    dt_phys = dt * time_scale
+    for p in prange(n_pairs):
+        a = pairs[p, 0]
+        b = pairs[p, 1]
+        if a > b:
+            a, b = b, a
+        if a == b or seg_body[a] == seg_body[b]:
+            continue
+        m = _segment_points(x, seg, a, b, valence, ps[p], pu[p], pw[p])
+        npt[p] = m
+        if m == 0:
+            continue
+        slot = _find_slot(hist_partner, seg, a, b)
+        a0 = seg[a, 0]
+        a1 = seg[a, 1]
+        b0 = seg[b, 0]
+        b1 = seg[b, 1]
+        rr = seg_r[a] + seg_r[b]
+        fold = scr[p, 0]
+        dg = scr[p, 1]
+        ds = scr[p, 2]
+        nv = scr[p, 3]
+        for k in range(m):
+            s = ps[p, k]
+            u = pu[p, k]
+            dist2 = 0.0
+            for c in range(3):
+                pa = (1 - s) * x[a0, c] + s * x[a1, c]
+                pb = (1 - u) * x[b0, c] + u * x[b1, c]
+                nv[c] = pa - pb
+                dist2 += nv[c] * nv[c]
+            dist = math.sqrt(dist2)
+            gap = dist - rr
+            if gap >= 0.0:
+                continue
+            act[p, k] = True
+            if dist > 1e-12 * rr:
+                for c in range(3):
+                    nv[c] /= dist
+            else:
+                for c in range(3):
+                    dg[c] = x[a1, c] - x[a0, c]
+                _any_perpendicular(dg, nv)
+            pn = -k_n * gap
+            w = pw[p, k]
+            for c in range(3):
+                pfn[p, k, c] = w * pn * nv[c]
+            if k_t <= 0.0:
+                continue
+            for c in range(3):
+                fold[c] = hist_ft[a, slot, k, c] if slot >= 0 else 0.0
+                dg[c] = dt * ((1 - s) * v[a0, c] + s * v[a1, c]
+                              - (1 - u) * v[b0, c] - u * v[b1, c])
+            _rotate_onto_plane(fold, nv)
+            dgn = _dot(dg, nv)
+            for c in range(3):
+                dg[c] -= dgn * nv[c]
+            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn,
+                                    hnew[p, k], ds)
+            for c in range(3):
+                pft[p, k, c] = -w * hnew[p, k, c]
+        if m == 1:
+            for c in range(3):
+                hnew[p, 1, c] = hnew[p, 0, c]
+    # serial: commit history, scatter forces
+    for i in range(hist_partner.shape[0]):
+        for s in range(hist_partner.shape[1]):
+            hist_partner[i, s] = -1
+    n_active = 0
+    for p in range(n_pairs):
+        m = npt[p]
+        if m == 0 or not (act[p, 0] or act[p, 1]):
+            continue
+        n_active += 1
+        a = pairs[p, 0]
+        b = pairs[p, 1]
+        if a > b:
+            a, b = b, a
+        slot = _free_slot(hist_partner, a)
+        if slot >= 0:
+            hist_partner[a, slot] = b
+            for k in range(2):
+                for c in range(3):
+                    hist_ft[a, slot, k, c] = hnew[p, k, c]
+        a0 = seg[a, 0]
+        a1 = seg[a, 1]
+        b0 = seg[b, 0]
+        b1 = seg[b, 1]
+        for k in range(m):
+            if not act[p, k]:
+                continue
+            s = ps[p, k]
+            u = pu[p, k]
+            for c in range(3):
+                fn = pfn[p, k, c]
+                ft = pft[p, k, c]
+                f_n[a0, c] += (1 - s) * fn
+                f_n[a1, c] += s * fn
+                f_n[b0, c] -= (1 - u) * fn
+                f_n[b1, c] -= u * fn
+                f_t[a0, c] += (1 - s) * ft
+                f_t[a1, c] += s * ft
+                f_t[b0, c] -= (1 - u) * ft
+                f_t[b1, c] -= u * ft
+    return n_active
+
+
+# -------------------------------------------------------- (b) nodes on rigid cylinders
+@njit(cache=True, parallel=True)
+def node_cylinder_contact(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, cyl_half_len,
+                          cyl_v, k_n, k_t, dt, hist_ft, f_n, f_t, f_cyl):
+    """Penalty contact of nodes (spheres of radius ``node_r``) with rigid cylinders, Coulomb.
+
+    Parameters
+    ----------
+    x, v : (n_nodes, 3+) positions, half-step velocities.
+    nodes : (n_cn,) UNIQUE node ids tested; node_r : (n_cn,) contact radius of each
+        (wire radius for beam nodes, half thickness for shell nodes);
+    node_mu : (n_cn,) friction coefficient per node (e.g. mu_rtb on tube nodes, mu_rtp on
+        tape nodes; constant Coulomb, no eq. 6).
+    cyl_c : (n_cyl, 3) current point of each axis (centre); cyl_axis : (n_cyl, 3) unit axes;
+    cyl_R : (n_cyl,) radii; cyl_half_len : (n_cyl,) half lengths about ``cyl_c`` along the
+        axis (np.inf for unbounded); cyl_v : (n_cyl, 3) rigid translational velocities.
+    k_n, k_t : normal and tangential penalties (N/mm); k_t = 0 disables friction.
+    dt : solver step.
+    hist_ft : (n_cn, n_cyl, 3) committed friction force per (node, cylinder), in place
+        (zeros to start; reset to zero when the node leaves the cylinder).
+    f_n, f_t : (n_nodes, 3+) outputs (ADDED); f_cyl : (n_cyl, 3) output, total force ON
+        each cylinder (normal + friction) ADDED (the loading pin reaction).
+
+    Gap ``|radial distance to the axis| - R - r``; normal radial from the axis.
+    Returns the number of active (node, cylinder) contacts.
+    """
+    n_cn = nodes.shape[0]
+    n_cyl = cyl_c.shape[0]
+    work = np.zeros((n_cn, n_cyl, 3))
+    scr = np.zeros((n_cn, 5, 3))
+    count = np.zeros(n_cn, dtype=np.int64)
+    for i in prange(n_cn):
+        nd = nodes[i]
+        nv = scr[i, 0]
+        dg = scr[i, 1]
+        fold = scr[i, 2]
+        ds = scr[i, 3]
+        fnew = scr[i, 4]
+        for c in range(n_cyl):
+            ax0 = cyl_axis[c, 0]
+            ax1 = cyl_axis[c, 1]
+            ax2 = cyl_axis[c, 2]
+            d0 = x[nd, 0] - cyl_c[c, 0]
+            d1 = x[nd, 1] - cyl_c[c, 1]
+            d2 = x[nd, 2] - cyl_c[c, 2]
+            al = d0 * ax0 + d1 * ax1 + d2 * ax2
+            inside = abs(al) <= cyl_half_len[c]
+            nv[0] = d0 - al * ax0
+            nv[1] = d1 - al * ax1
+            nv[2] = d2 - al * ax2
+            dist = math.sqrt(_dot(nv, nv))
+            gap = dist - cyl_R[c] - node_r[i]
+            if (not inside) or gap >= 0.0 or dist <= 0.0:
+                for k in range(3):
+                    hist_ft[i, c, k] = 0.0
+                continue
+            count[i] += 1
+            for k in range(3):
+                nv[k] /= dist
+            pn = -k_n * gap
+            for k in range(3):
+                f_n[nd, k] += pn * nv[k]
+                work[i, c, k] -= pn * nv[k]
+            if k_t <= 0.0 or node_mu[i] <= 0.0:
+                continue
+            for k in range(3):
+                fold[k] = hist_ft[i, c, k]
+                dg[k] = dt * (v[nd, k] - cyl_v[c, k])
+            _rotate_onto_plane(fold, nv)
+            dgn = _dot(dg, nv)
+            for k in range(3):
+                dg[k] -= dgn * nv[k]
+            coulomb_return_map(fold, dg, k_t, node_mu[i], pn, fnew, ds)
+            for k in range(3):
+                hist_ft[i, c, k] = fnew[k]
+                f_t[nd, k] -= fnew[k]
+                work[i, c, k] += fnew[k]
+    n_active = 0
+    for i in range(n_cn):
+        n_active += count[i]
+        for c in range(n_cyl):
+            for k in range(3):
+                f_cyl[c, k] += work[i, c, k]
+    return n_active
+
+
+# ------------------------------------------------------ (c) nodes on shell facets (quads)
+@njit(cache=True, parallel=True)
+def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n, k_t, mu_s,
+                       mu_k, d_c, dt, time_scale, pen_max, hist_partner, hist_ft, f_n, f_t):
+    """One-sided penalty contact of nodes (spheres) with bilinear shell quads, eq. 6 friction.
+
+    Parameters
+    ----------
+    x, v : (n_nodes, 3+) positions, half-step velocities.
+    nodes : (n_cn,) node ids (e.g. the wire nodes); node_r : (n_cn,) their radii.
+    quads : (n_q, 4) node ids; quad_t : (n_q,) thicknesses; quad_sign : (n_q,) +1 / -1:
+        the side where the nodes belong is ``quad_sign * (X_xi x X_eta)`` (e.g. -1 for
+        wires inside a tube whose quad normals point outwards).
+    pairs : (n_pairs, 2) candidate (index into ``nodes``, quad) pairs, e.g. ``box_pairs``
+        of ``node_aabbs`` vs ``quad_aabbs`` with same_set False.
+    k_n, k_t : penalties (N/mm); mu_s, mu_k, d_c : eq. 6 (mu_s = mu_k for constant mu);
+    dt, time_scale : solver step, physical / simulated duration.
+    pen_max : largest penetration accepted (mm); beyond it the node is taken to be on
+        the other side (never grabbed from the wrong side), e.g. ``r + t/2``.
+    hist_partner : (n_cn, MAXS) int64; hist_ft : (n_cn, MAXS, 3), in place
+        (``new_slot_history(n_cn, maxs)``).
+    f_n, f_t : outputs, ADDED.  The node receives F, the quad nodes -F N_i(xi, eta).
+
+    Gap: signed distance of the node centre to the mid-surface along the oriented normal
+    at its projection (xi, eta) (Gauss-Newton on the bilinear surface), minus r + t/2.
+    A projection in the band |xi|, |eta| <= 1 + EDGE_TOL is accepted with the weight
+    ``ramp(xi) ramp(eta)`` (1 inside, 1/2 on an edge), a partition of unity over
+    neighbouring quads, so a node sliding across an edge is neither doubled nor dropped.
+    Returns the number of active pairs.
+    """
+    n_pairs = pairs.shape[0]
+    act = np.zeros(n_pairs, dtype=np.bool_)
+    pN = np.zeros((n_pairs, 4))
+    pfn = np.zeros((n_pairs, 3))
+    pft = np.zeros((n_pairs, 3))
+    hnew = np.zeros((n_pairs, 3))
+    scr = np.zeros((n_pairs, 5, 3))
+    prj = np.zeros((n_pairs, 8))
+    dt_phys = dt * time_scale
+    for p in prange(n_pairs):
+        i = pairs[p, 0]
+        q = pairs[p, 1]
+        nd = nodes[i]
+        if (quads[q, 0] == nd or quads[q, 1] == nd or quads[q, 2] == nd
+                or quads[q, 3] == nd):
+            continue
+        out = prj[p]
+        _project_quad(x, quads, q, x[nd], False, out)
+        xi = out[0]
+        eta = out[1]
+        w = _ramp(xi) * _ramp(eta)
+        if w <= 0.0:
+            continue
+        nv = scr[p, 0]
+        sg = quad_sign[q]
+        for c in range(3):
+            nv[c] = sg * out[5 + c]
+        dist = 0.0
+        for c in range(3):
+            dist += (x[nd, c] - out[2 + c]) * nv[c]
+        gap = dist - node_r[i] - 0.5 * quad_t[q]
+        if gap >= 0.0 or -gap > pen_max:
+            continue
+        act[p] = True
+        N = pN[p]
+        N[0] = 0.25 * (1 - xi) * (1 - eta)
+        N[1] = 0.25 * (1 + xi) * (1 - eta)
+        N[2] = 0.25 * (1 + xi) * (1 + eta)
+        N[3] = 0.25 * (1 - xi) * (1 + eta)
+        pn = -k_n * gap
+        for c in range(3):
+            pfn[p, c] = w * pn * nv[c]
+        if k_t <= 0.0:
+            continue
+        fold = scr[p, 1]
+        dg = scr[p, 2]
+        ds = scr[p, 3]
+        slot = _find_slot(hist_partner, quads, i, q)
+        for c in range(3):
+            fold[c] = hist_ft[i, slot, c] if slot >= 0 else 0.0
+            vq = 0.0
+            for m in range(4):
+                vq += N[m] * v[quads[q, m], c]
+            dg[c] = dt * (v[nd, c] - vq)
+        _rotate_onto_plane(fold, nv)
+        dgn = _dot(dg, nv)
+        for c in range(3):
+            dg[c] -= dgn * nv[c]
+        rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew[p], ds)
+        for c in range(3):
+            pft[p, c] = -w * hnew[p, c]
+    for i in range(hist_partner.shape[0]):
+        for s in range(hist_partner.shape[1]):
+            hist_partner[i, s] = -1
+    n_active = 0
+    for p in range(n_pairs):
+        if not act[p]:
+            continue
+        n_active += 1
+        i = pairs[p, 0]
+        q = pairs[p, 1]
+        nd = nodes[i]
+        slot = _free_slot(hist_partner, i)
+        if slot >= 0:
+            hist_partner[i, slot] = q
+            for c in range(3):
+                hist_ft[i, slot, c] = hnew[p, c]
+        for c in range(3):
+            f_n[nd, c] += pfn[p, c]
+            f_t[nd, c] += pft[p, c]
+            for m in range(4):
+                f_n[quads[q, m], c] -= pN[p, m] * pfn[p, c]
+                f_t[quads[q, m], c] -= pN[p, m] * pft[p, c]
+    return n_active
+
+
+# ------------------------------------------------------------------ (d) cohesive ties
+@njit(cache=True)
+def _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
+                  tie_area, tloc):
+    """Eqs. 7-10 at one tie; updates kappa, D (never decreasing) and the dissipated energy."""
+    D_old = tie_D[j]
+    D, kappa = cohesive_traction(delta, K, delta0, delta_mf, alpha, tie_kappa[j], D_old, tloc)
+    if D > D_old:
+        dn = max(delta[0], 0.0)
+        y = 0.5 * (K[0] * dn * dn + K[1] * delta[1] * delta[1] + K[2] * delta[2] * delta[2])
+        tie_energy[j] += (D - D_old) * y * tie_area[j]
+    tie_D[j] = D
+    tie_kappa[j] = kappa
+
+
+@njit(cache=True, parallel=True)
+def cohesive_ties_quad(x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, quads, K,
+                       delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, f_c):
+    """Cohesive ties (eqs. 7-10) of nodes to fixed material points of shell quads.
+
+    Parameters
+    ----------
+    x : (n_nodes, 3+) positions.
+    tie_node : (n_tie,) the bonded (tape) node; tie_quad : (n_tie,) target quad;
+    tie_xi : (n_tie, 2) bilinear coordinates (xi, eta) in [-1, 1]^2 of the target point;
+    tie_sign : (n_tie,) +1 / -1 orienting the normal X_xi x X_eta towards the tied node;
+    tie_off : (n_tie, 3) initial separation x_node - x_target in the local frame
+        (n, s, t) (so that delta = 0 at the start);
+    tie_area : (n_tie,) tributary area (mm^2).  (All from :func:`make_ties`.)
+    quads : (n_q, 4) node ids; K (3,), delta0 (3,), delta_mf, alpha : eqs. 7-10.
+    tie_kappa, tie_D : (n_tie,) history, in place (D never decreases);
+    tie_energy : (n_tie,) dissipated energy (N mm) accumulated in place,
+        sum of area * (D_new - D_old) * Y with Y = (K_n <dn>^2 + K_s ds^2 + K_t dt^2) / 2.
+    f_c : (n_nodes, 3+) output, cohesive forces ADDED (own array, not f_n / f_t).
+
+    Frame: n = sign * unit(X_xi x X_eta), s = unit(X_xi), t = n x s at the tie point (it
+    rotates with the quad).  delta = frame^T (x_node - x_target) - tie_off.  The tied
+    node receives -t(delta) A (opening pulls it back; compression pushes it out by the
+    K_nn penalty whatever D), the quad nodes +t A N_i.
+    Returns the number of fully debonded ties (D >= 1).
+    """
+    n = tie_node.shape[0]
+    pf = np.zeros((n, 3))
+    scr = np.zeros((n, 5, 3))
+    for j in prange(n):
+        q = tie_quad[j]
+        delta = scr[j, 0]
+        tloc = scr[j, 1]
+        X = scr[j, 2]
+        nq = scr[j, 3]
+        e1 = scr[j, 4]
+        _quad_eval(x, quads, q, tie_xi[j, 0], tie_xi[j, 1], X, nq, e1)
+        sg = tie_sign[j]
+        d0 = x[tie_node[j], 0] - X[0]
+        d1 = x[tie_node[j], 1] - X[1]
+        d2 = x[tie_node[j], 2] - X[2]
+        n0 = sg * nq[0]
+        n1 = sg * nq[1]
+        n2 = sg * nq[2]
+        t0 = n1 * e1[2] - n2 * e1[1]
+        t1 = n2 * e1[0] - n0 * e1[2]
+        t2 = n0 * e1[1] - n1 * e1[0]
+        delta[0] = d0 * n0 + d1 * n1 + d2 * n2 - tie_off[j, 0]
+        delta[1] = d0 * e1[0] + d1 * e1[1] + d2 * e1[2] - tie_off[j, 1]
+        delta[2] = d0 * t0 + d1 * t1 + d2 * t2 - tie_off[j, 2]
+        _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
+                      tie_area, tloc)
+        A = tie_area[j]
+        pf[j, 0] = -A * (tloc[0] * n0 + tloc[1] * e1[0] + tloc[2] * t0)
+        pf[j, 1] = -A * (tloc[0] * n1 + tloc[1] * e1[1] + tloc[2] * t1)
+        pf[j, 2] = -A * (tloc[0] * n2 + tloc[1] * e1[2] + tloc[2] * t2)
+    n_failed = 0
+    for j in range(n):
+        if tie_D[j] >= 1.0:
+            n_failed += 1
+        q = tie_quad[j]
+        xi = tie_xi[j, 0]
+        eta = tie_xi[j, 1]
+        N0 = 0.25 * (1 - xi) * (1 - eta)
+        N1 = 0.25 * (1 + xi) * (1 - eta)
+        N2 = 0.25 * (1 + xi) * (1 + eta)
+        N3 = 0.25 * (1 - xi) * (1 + eta)
+        for c in range(3):
+            f = pf[j, c]
+            f_c[tie_node[j], c] += f
+            f_c[quads[q, 0], c] -= N0 * f
+            f_c[quads[q, 1], c] -= N1 * f
+            f_c[quads[q, 2], c] -= N2 * f
+            f_c[quads[q, 3], c] -= N3 * f
+    return n_failed
+
+
+@njit(cache=True)
+def _transport(t0, t, v, out):
+    """Minimal rotation taking unit t0 onto unit t, applied to v (no twist about the axis)."""
+    c = _dot(t0, t)
+    w0 = t0[1] * t[2] - t0[2] * t[1]
+    w1 = t0[2] * t[0] - t0[0] * t[2]
+    w2 = t0[0] * t[1] - t0[1] * t[0]
+    wv = w0 * v[0] + w1 * v[1] + w2 * v[2]
+    f = wv / (1.0 + c) if c > -1.0 + 1e-12 else 0.0
+    out[0] = c * v[0] + (w1 * v[2] - w2 * v[1]) + f * w0
+    out[1] = c * v[1] + (w2 * v[0] - w0 * v[2]) + f * w1
+    out[2] = c * v[2] + (w0 * v[1] - w1 * v[0]) + f * w2
+
+
+@njit(cache=True, parallel=True)
+def cohesive_ties_seg(x, tie_node, tie_seg, tie_s, tie_n0, tie_t0, tie_off, tie_area, seg, K,
+                      delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, f_c):
+    """Cohesive ties (eqs. 7-10) of nodes to fixed material points of beam segments.
+
+    Parameters as :func:`cohesive_ties_quad` except the target: tie_seg : (n_tie,)
+    segment; tie_s : (n_tie,) its parameter in [0, 1] (point (1 - s) x_0 + s x_1);
+    tie_n0 : (n_tie, 3) the initial unit radial direction (segment point -> tied node);
+    tie_t0 : (n_tie, 3) the initial unit segment axis; seg : (n_seg, 2) node ids.
+
+    Frame: s = current unit axis; n = tie_n0 carried by the minimal rotation taking
+    tie_t0 onto s (the beams' twist is not seen: the kernel only knows translations);
+    t = n x s.  delta = (d.n, d.s, d.t) - tie_off with d = x_node - x_target.
+    Returns the number of fully debonded ties.
+    """
+    n = tie_node.shape[0]
+    pf = np.zeros((n, 3))
+    scr = np.zeros((n, 4, 3))
+    for j in prange(n):
+        e = tie_seg[j]
+        s = tie_s[j]
+        a0 = seg[e, 0]
+        a1 = seg[e, 1]
+        delta = scr[j, 0]
+        tloc = scr[j, 1]
+        ax = scr[j, 2]
+        nn = scr[j, 3]
+        for c in range(3):
+            ax[c] = x[a1, c] - x[a0, c]
+        L = math.sqrt(_dot(ax, ax))
+        for c in range(3):
+            ax[c] /= L
+        _transport(tie_t0[j], ax, tie_n0[j], nn)
+        t0 = nn[1] * ax[2] - nn[2] * ax[1]
+        t1 = nn[2] * ax[0] - nn[0] * ax[2]
+        t2 = nn[0] * ax[1] - nn[1] * ax[0]
+        nd = tie_node[j]
+        d0 = x[nd, 0] - (1 - s) * x[a0, 0] - s * x[a1, 0]
+        d1 = x[nd, 1] - (1 - s) * x[a0, 1] - s * x[a1, 1]
+        d2 = x[nd, 2] - (1 - s) * x[a0, 2] - s * x[a1, 2]
+        delta[0] = d0 * nn[0] + d1 * nn[1] + d2 * nn[2] - tie_off[j, 0]
+        delta[1] = d0 * ax[0] + d1 * ax[1] + d2 * ax[2] - tie_off[j, 1]
+        delta[2] = d0 * t0 + d1 * t1 + d2 * t2 - tie_off[j, 2]
+        _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
+                      tie_area, tloc)
+        A = tie_area[j]
+        pf[j, 0] = -A * (tloc[0] * nn[0] + tloc[1] * ax[0] + tloc[2] * t0)
+        pf[j, 1] = -A * (tloc[0] * nn[1] + tloc[1] * ax[1] + tloc[2] * t1)
+        pf[j, 2] = -A * (tloc[0] * nn[2] + tloc[1] * ax[2] + tloc[2] * t2)
+    n_failed = 0
+    for j in range(n):
+        if tie_D[j] >= 1.0:
+            n_failed += 1
+        e = tie_seg[j]
+        s = tie_s[j]
+        for c in range(3):
+            f = pf[j, c]
+            f_c[tie_node[j], c] += f
+            f_c[seg[e, 0], c] -= (1 - s) * f
+            f_c[seg[e, 1], c] -= s * f
+    return n_failed
+
+
+@njit(cache=True)
+def cohesive_tie_dissipation(tie_kappa, tie_area, K, delta0, delta_mf, alpha):
+    """Closed-form estimate of the energy dissipated per tie (N mm), eqs. 7-10.
+
+    ``area * cohesive_dissipated_energy(K_nn, delta_n^0, delta_mf, alpha, kappa)``: exact
+    for a proportional pure-opening path (or pure shear when K and delta^0 are equal in
+    all directions, as in the paper); for mixed or non-proportional paths prefer the
+    incremental ``tie_energy`` accumulated by the tie kernels.  The damage is ``tie_D``.
+    """
+    n = tie_kappa.shape[0]
+    out = np.empty(n)
+    for j in range(n):
+        out[j] = tie_area[j] * cohesive_dissipated_energy(K[0], delta0[0], delta_mf, alpha,
+                                                          tie_kappa[j])
+    return out
+
+
+# ----------------------------------------------------------------- (e) tie construction
+@njit(cache=True, parallel=True)
+def _candidates_quad(x, tape_nodes, quads, pairs, out_xi, out_gap, out_X, out_n):
+    for p in prange(pairs.shape[0]):
+        i = pairs[p, 0]
+        q = pairs[p, 1]
+        pr = np.empty(8)
+        _project_quad(x, quads, q, x[tape_nodes[i]], True, pr)
+        out_xi[p, 0] = pr[0]
+        out_xi[p, 1] = pr[1]
+        # re-evaluate exactly at the clamped parameters
+        X = np.empty(3)
+        nq = np.empty(3)
+        e1 = np.empty(3)
+        _quad_eval(x, quads, q, pr[0], pr[1], X, nq, e1)
+        d2 = 0.0
+        for c in range(3):
+            out_X[p, c] = X[c]
+            out_n[p, c] = nq[c]
+            d2 += (x[tape_nodes[i], c] - X[c]) ** 2
+        out_gap[p] = math.sqrt(d2)
+
+
+@njit(cache=True, parallel=True)
+def _candidates_seg(x, tape_nodes, seg, pairs, out_s, out_dist):
+    for p in prange(pairs.shape[0]):
+        i = pairs[p, 0]
+        e = pairs[p, 1]
+        nd = tape_nodes[i]
+        a0 = seg[e, 0]
+        a1 = seg[e, 1]
+        L2 = 0.0
+        dd = 0.0
+        for c in range(3):
+            L2 += (x[a1, c] - x[a0, c]) ** 2
+            dd += (x[nd, c] - x[a0, c]) * (x[a1, c] - x[a0, c])
+        s = min(1.0, max(0.0, dd / L2))
+        d2 = 0.0
+        for c in range(3):
+            d2 += (x[nd, c] - (1 - s) * x[a0, c] - s * x[a1, c]) ** 2
+        out_s[p] = s
+        out_dist[p] = math.sqrt(d2)
+
+
+def _best_per_node(n_nodes, owner, score):
+    """Index of the lowest score per owner (-1 where none)."""
+    best = -np.ones(n_nodes, dtype=np.int64)
+    if owner.size == 0:
+        return best
+    order = np.lexsort((score, owner))
+    first = np.ones(order.size, dtype=bool)
+    first[1:] = owner[order][1:] != owner[order][:-1]
+    best[owner[order][first]] = order[first]
+    return best
+
+
+def make_ties(x, tape_nodes, node_area, quads=None, quad_t=None, quad_sign=None, seg=None,
+              seg_r=None, tape_half_t=0.0, tol=0.05):
+    """Tie each tape node to the closest point of the target quads / segments.
+
+    Parameters
+    ----------
+    x : (n_nodes, 3+) INITIAL positions.
+    tape_nodes : (n,) candidate bonded nodes; node_area : (n,) their tributary areas
+        (mm^2, from the caller).
+    quads, quad_t : (n_q, 4) target quads and thicknesses (optional);
+    quad_sign : (n_q,) optional +1/-1 orienting X_xi x X_eta towards the tape; if None
+        the side of each tape node is taken from its initial offset.
+    seg, seg_r : (n_seg, 2) target beam segments and radii (optional).
+    tape_half_t : half thickness of the tape (mm).
+    tol : accepted |surface gap| (mm): the node is tied if the distance between the
+        tape mid-surface and the target surface, |d| - t_q/2 - tape_half_t (quads) or
+        |d| - r - tape_half_t (segments), is below tol; the closest target wins.
+
+    Returns
+    -------
+    (ties_quad, ties_seg) : dicts of arrays, the arguments of
+    :func:`cohesive_ties_quad` (``tie_node, tie_quad, tie_xi, tie_sign, tie_off,
+    tie_area``) and :func:`cohesive_ties_seg` (``tie_node, tie_seg, tie_s, tie_n0,
+    tie_t0, tie_off, tie_area``), plus zeroed ``tie_kappa``, ``tie_D``, ``tie_energy``.
+    """
+    x = np.ascontiguousarray(np.asarray(x, dtype=float)[:, :3])
+    tape_nodes = np.asarray(tape_nodes, dtype=np.int64)
+    node_area = np.asarray(node_area, dtype=float)
+    n = tape_nodes.size
+    big = np.inf
+    best_q_gap = np.full(n, big)
+    best_s_gap = np.full(n, big)
+    q_sel = None
+    s_sel = None
+    if quads is not None and len(quads):
+        quads = np.asarray(quads, dtype=np.int64)
+        quad_t = np.asarray(quad_t, dtype=float)
+        lo_q, hi_q = quad_aabbs(x, quads, 0.5 * quad_t, tol + tape_half_t)
+        lo_n, hi_n = node_aabbs(x, tape_nodes, np.zeros(n), 0.0)
+        cell = float(np.median(np.max(hi_q - lo_q, axis=1)))
+        pairs = box_pairs(lo_n, hi_n, lo_q, hi_q, cell, False)
+        xi = np.zeros((len(pairs), 2))
+        dist = np.zeros(len(pairs))
+        X = np.zeros((len(pairs), 3))
+        nq = np.zeros((len(pairs), 3))
+        _candidates_quad(x, tape_nodes, quads, pairs, xi, dist, X, nq)
+        gap = np.abs(dist - 0.5 * quad_t[pairs[:, 1]] - tape_half_t)
+        ok = gap <= tol
+        best = _best_per_node(n, pairs[ok, 0], gap[ok])
+        idx = np.flatnonzero(ok)
+        q_sel = np.where(best >= 0, idx[np.maximum(best, 0)], -1)
+        best_q_gap = np.where(best >= 0, gap[np.maximum(q_sel, 0)], big)
+        q_data = (pairs, xi, X, nq)
+    if seg is not None and len(seg):
+        seg = np.asarray(seg, dtype=np.int64)
+        seg_r = np.asarray(seg_r, dtype=float)
+        lo_e, hi_e = segment_aabbs(x, seg, seg_r, tol + tape_half_t)
+        lo_n, hi_n = node_aabbs(x, tape_nodes, np.zeros(n), 0.0)
+        cell = float(np.median(np.max(hi_e - lo_e, axis=1)))
+        pairs_s = box_pairs(lo_n, hi_n, lo_e, hi_e, cell, False)
+        s_par = np.zeros(len(pairs_s))
+        dist_s = np.zeros(len(pairs_s))
+        _candidates_seg(x, tape_nodes, seg, pairs_s, s_par, dist_s)
+        gap_s = np.abs(dist_s - seg_r[pairs_s[:, 1]] - tape_half_t)
+        ok = gap_s <= tol
+        best = _best_per_node(n, pairs_s[ok, 0], gap_s[ok])
+        idx = np.flatnonzero(ok)
+        s_sel = np.where(best >= 0, idx[np.maximum(best, 0)], -1)
+        best_s_gap = np.where(best >= 0, gap_s[np.maximum(s_sel, 0)], big)
+    use_q = np.isfinite(best_q_gap) & (best_q_gap <= best_s_gap)
+    use_s = np.isfinite(best_s_gap) & ~use_q
+
+    ties_quad = {}
+    iq = np.flatnonzero(use_q)
+    if q_sel is not None:
+        pairs, xi, X, nq = q_data
+        sel = q_sel[iq]
+        tq = pairs[sel, 1]
+        nodes = tape_nodes[iq]
+        d = x[nodes] - X[sel]
+        nrm = nq[sel]
+        e1 = np.zeros_like(nrm)
+        for k, (q, (a, b)) in enumerate(zip(tq, xi[sel])):
+            _, _, e1[k] = quad_point(x, quads, q, a, b)
+        dn = np.einsum("ij,ij->i", d, nrm)
+        if quad_sign is not None:
+            sign = np.asarray(quad_sign, dtype=float)[tq]
+        else:
+            sign = np.where(dn < 0.0, -1.0, 1.0)
+        nrm = nrm * sign[:, None]
+        t = np.cross(nrm, e1)
+        off = np.stack([np.einsum("ij,ij->i", d, nrm), np.einsum("ij,ij->i", d, e1),
+                        np.einsum("ij,ij->i", d, t)], axis=1)
+        ties_quad = dict(tie_node=nodes, tie_quad=tq, tie_xi=np.ascontiguousarray(xi[sel]),
+                         tie_sign=sign, tie_off=off, tie_area=node_area[iq].copy())
+    else:
+        ties_quad = dict(tie_node=np.zeros(0, np.int64), tie_quad=np.zeros(0, np.int64),
+                         tie_xi=np.zeros((0, 2)), tie_sign=np.zeros(0), tie_off=np.zeros((0, 3)),
+                         tie_area=np.zeros(0))
+    m = len(ties_quad["tie_node"])
+    ties_quad.update(tie_kappa=np.zeros(m), tie_D=np.zeros(m), tie_energy=np.zeros(m))
+
+    is_ = np.flatnonzero(use_s)
+    if s_sel is not None and is_.size:
+        sel = s_sel[is_]
+        te = pairs_s[sel, 1]
+        sp = s_par[sel]
+        nodes = tape_nodes[is_]
+        t0 = x[seg[te, 1]] - x[seg[te, 0]]
+        t0 /= np.linalg.norm(t0, axis=1)[:, None]
+        P = (1 - sp)[:, None] * x[seg[te, 0]] + sp[:, None] * x[seg[te, 1]]
+        d = x[nodes] - P
+        radial = d - np.einsum("ij,ij->i", d, t0)[:, None] * t0
+        rn = np.linalg.norm(radial, axis=1)
+        n0 = np.zeros_like(radial)
+        for k in range(len(nodes)):
+            if rn[k] > 1e-12:
+                n0[k] = radial[k] / rn[k]
+            else:
+                _any_perpendicular(t0[k].copy(), n0[k])
+        tt = np.cross(n0, t0)
+        off = np.stack([np.einsum("ij,ij->i", d, n0), np.einsum("ij,ij->i", d, t0),
+                        np.einsum("ij,ij->i", d, tt)], axis=1)
+        ties_seg = dict(tie_node=nodes, tie_seg=te, tie_s=sp, tie_n0=n0, tie_t0=t0, tie_off=off,
+                        tie_area=node_area[is_].copy())
+    else:
+        ties_seg = dict(tie_node=np.zeros(0, np.int64), tie_seg=np.zeros(0, np.int64),
+                        tie_s=np.zeros(0), tie_n0=np.zeros((0, 3)), tie_t0=np.zeros((0, 3)),
+                        tie_off=np.zeros((0, 3)), tie_area=np.zeros(0))
+    m = len(ties_seg["tie_node"])
+    ties_seg.update(tie_kappa=np.zeros(m), tie_D=np.zeros(m), tie_energy=np.zeros(m))
+    return ties_quad, ties_seg

@@ -1,0 +1,381 @@
+"""Contact, friction and cohesive kernels of the explicit bundle model (fe/contact_explicit.py)."""
+import math
+
+import numpy as np
+import pytest
+
+from harnesspipe.fe.cohesive import cohesive_dissipated_energy
+from harnesspipe.fe.contact_explicit import (
+    beam_beam_contact, cohesive_tie_dissipation, cohesive_ties_quad, cohesive_ties_seg,
+    make_ties, new_slot_history, node_cylinder_contact, node_facet_contact)
+from harnesspipe.fe.spatial_hash import box_pairs, node_aabbs, quad_aabbs, segment_aabbs
+
+R_W = 0.65
+
+
+def _z(n):
+    return np.zeros((n, 6))
+
+
+# ------------------------------------------------------------------------ spatial hash
+@pytest.mark.parametrize("same", [True, False])
+def test_box_pairs_matches_brute_force(same):
+    rng = np.random.default_rng(3)
+    lo_a = rng.uniform(-10, 10, (250, 3))
+    hi_a = lo_a + rng.uniform(0, 4, (250, 3))
+    if same:
+        lo_b, hi_b = lo_a, hi_a
+    else:
+        lo_b = rng.uniform(-10, 10, (180, 3))
+        hi_b = lo_b + rng.uniform(0, 2, (180, 3))
+    for cell in (0.7, 2.0, 9.0):
+        got = box_pairs(lo_a, hi_a, lo_b, hi_b, cell, same)
+        ov = np.all((lo_a[:, None] <= hi_b[None]) & (lo_b[None] <= hi_a[:, None]), axis=2)
+        if same:
+            ov = np.triu(ov, 1)
+        ref = set(zip(*np.nonzero(ov)))
+        pairs = [tuple(p) for p in got]
+        assert len(pairs) == len(set(pairs))          # each pair once
+        assert set(pairs) == ref
+        if same:
+            assert np.all(got[:, 0] < got[:, 1])
+
+
+def test_aabb_helpers():
+    x = np.array([[0.0, 0, 0], [3, 1, 0], [3, 1, 2], [0, 0, 2]])
+    lo, hi = segment_aabbs(x, np.array([[0, 1]]), np.array([0.5]), 0.1)
+    assert np.allclose(lo[0], [-0.6, -0.6, -0.6]) and np.allclose(hi[0], [3.6, 1.6, 0.6])
+    lo, hi = quad_aabbs(x, np.array([[0, 1, 2, 3]]), np.array([0.2]), 0.0)
+    assert np.allclose(lo[0], [-0.2, -0.2, -0.2]) and np.allclose(hi[0], [3.2, 1.2, 2.2])
+    lo, hi = node_aabbs(x, np.array([2]), np.array([1.0]), 0.5)
+    assert np.allclose(hi[0] - lo[0], 3.0)
+
+
+# ------------------------------------------------------------------------- wire-wire
+def _bb(x, v, seg, pairs, body, hp, hf, k_n=100.0, k_t=0.0, dt=1e-5, ts=1.0, mu=(0.4, 0.1, 2.0)):
+    fn = _z(len(x))
+    ft = _z(len(x))
+    n = beam_beam_contact(x, v, seg, np.full(len(seg), R_W), body, pairs, k_n, k_t, mu[0], mu[1],
+                          mu[2], dt, ts, hp, hf, fn, ft)
+    return n, fn, ft
+
+
+def test_crossed_wires_static_load_and_no_tunnelling():
+    k_n, m, F = 100.0, 1e-6, 2.0
+    seg = np.array([[0, 1], [2, 3]])
+    body = np.array([0, 1])
+    pairs = np.array([[0, 1]])
+    omega = math.sqrt(2 * k_n / m)
+    dt = 0.2 / omega
+    # (1) B pressed on A with F (F/2 per node), damped explicit loop -> penetration F/k
+    x = np.array([[-5.0, 0, 0], [5, 0, 0], [0, -5, 2 * R_W + 0.1], [0, 5, 2 * R_W + 0.1]])
+    v = _z(4)
+    hp, hf = new_slot_history(2, 8, 2)
+    c = 0.5 * 2 * math.sqrt(k_n * m)
+    for _ in range(3000):
+        x[2:] += dt * v[2:, :3]
+        _, fn, ft = _bb(x, v, seg, pairs, body, hp, hf, k_n=k_n, dt=dt)
+        a = (fn[2:, :3] - c * v[2:, :3]) / m
+        a[:, 2] -= F / 2 / m
+        v[2:, :3] += dt * a
+    pen = 2 * R_W - (x[2, 2] - x[0, 2])
+    assert pen == pytest.approx(F / k_n, rel=1e-3)
+    assert fn[:2, 2].sum() == pytest.approx(-F, rel=1e-3)       # reaction on A = load
+    assert fn[2:, 2].sum() == pytest.approx(F, rel=1e-3)
+    assert np.allclose(fn[:, :3].sum(axis=0), 0.0, atol=1e-12)
+    # (2) B thrown at A at 0.1 mm per step (< element size, < r_a + r_b): it bounces
+    x = np.array([[-5.0, 0, 0], [5, 0, 0], [0.3, -5, 2 * R_W + 0.5], [0.3, 5, 2 * R_W + 0.5]])
+    v = _z(4)
+    v0 = 0.1 / dt
+    v[2:, 2] = -v0
+    hp, hf = new_slot_history(2, 8, 2)
+    zmin = np.inf
+    for _ in range(400):
+        x[2:] += dt * v[2:, :3]
+        zmin = min(zmin, x[2, 2])
+        _, fn, _ = _bb(x, v, seg, pairs, body, hp, hf, k_n=k_n, dt=dt)
+        v[2:, :3] += dt * fn[2:, :3] / m
+    pen_max = v0 * math.sqrt(2 * m / k_n)    # energy balance (mass 2m on k_n), < 2 r
+    assert pen_max < 2 * R_W
+    assert 2 * R_W - zmin <= 1.05 * pen_max
+    assert v[2, 2] > 0.9 * v0 and x[2, 2] > 2 * R_W        # bounced back, never crossed
+
+
+def test_parallel_wires_equal_split_no_jitter():
+    pen = 0.05
+    k_n = 100.0
+    x = np.array([[0.0, 0, 0], [8, 0, 0], [0, 0, 2 * R_W - pen], [8, 0, 2 * R_W - pen]])
+    seg = np.array([[0, 1], [2, 3]])
+    body = np.array([0, 1])
+    hp, hf = new_slot_history(2, 8, 2)
+    ref = None
+    rng = np.random.default_rng(0)
+    for trial in range(20):
+        xp = x.copy()
+        if trial:
+            xp[2:, :2] += rng.uniform(-1e-6, 1e-6, (2, 2))
+        n, fn, _ = _bb(xp, _z(4), seg, np.array([[0, 1]]), body, hp, hf, k_n=k_n)
+        assert n == 1
+        if ref is None:
+            ref = fn.copy()
+            assert fn[2, 2] == pytest.approx(fn[3, 2], rel=1e-12)        # equal split
+            assert fn[2:, 2].sum() == pytest.approx(k_n * pen, rel=1e-12)
+        assert np.allclose(fn, ref, atol=1e-6 * k_n * pen)               # no jitter
+    # chains of 4 segments, aligned and staggered by half an element: every node-to-segment
+    # line carries k_n pen, the total is k_n pen x (overlap length / element length)
+    for shift in (0.0, 4.0):
+        xa = np.stack([np.arange(5) * 8.0, np.zeros(5), np.zeros(5)], axis=1)
+        xb = xa + [shift, 0, 2 * R_W - pen]
+        xx = np.vstack([xa, xb])
+        sg = np.array([[i, i + 1] for i in range(4)] + [[5 + i, 6 + i] for i in range(4)])
+        bd = np.array([0] * 4 + [1] * 4)
+        lo, hi = segment_aabbs(xx, sg, np.full(8, R_W), 0.1)
+        pairs = box_pairs(lo, hi, lo, hi, 8.0, True)
+        hp, hf = new_slot_history(8, 8, 2)
+        _, fn, _ = _bb(xx, _z(10), sg, pairs, bd, hp, hf, k_n=k_n)
+        overlap = 32.0 - shift
+        assert fn[5:, 2].sum() == pytest.approx(k_n * pen * overlap / 8.0, rel=1e-12)
+        if shift == 0.0:
+            assert np.allclose(fn[6:9, 2], k_n * pen) and np.allclose(fn[[5, 9], 2], k_n * pen / 2)
+
+
+def test_wire_wire_friction_eq6_history_across_rehash():
+    """Parallel wires sliding axially: friction = mu(rate) N, mu from eq. 6 in physical time."""
+    pen, k_n, k_t = 0.05, 100.0, 200.0
+    N = k_n * pen
+    dt = 1e-4
+    for ts, V in ((1.0, 0.5), (120.0, 0.5 * 120)):
+        x = np.array([[0.0, 0, 0], [8, 0, 0], [0, 0, 2 * R_W - pen], [8, 0, 2 * R_W - pen]])
+        v = _z(4)
+        v[2:, 0] = V
+        seg = np.array([[0, 1], [2, 3]])
+        hp, hf = new_slot_history(2, 4, 2)
+        for step in range(300):
+            # (positions frozen: the slip comes from the velocities, the overlap stays 8 mm)
+            pairs = np.array([[0, 1]]) if step % 2 else np.array([[1, 0], [0, 0]])
+            _, fn, ft = _bb(x, v, seg, pairs, np.array([0, 1]), hp, hf, k_n=k_n, k_t=k_t,
+                            dt=dt, ts=ts)
+        mu = 0.1 + 0.3 * math.exp(-2.0 * V / ts)   # physical slip rate V / ts
+        assert ft[2:, 0].sum() == pytest.approx(-mu * N, rel=1e-9)    # opposes B's motion
+        assert ft[:2, 0].sum() == pytest.approx(mu * N, rel=1e-9)
+        assert np.allclose(ft[:, 1:3], 0.0)
+    # (the two runs differ 120x in simulated speed but share the physical rate, hence mu)
+
+
+# ---------------------------------------------------------------- node on rigid cylinder
+def test_node_on_cylinder_stick_slip_energy_and_reaction():
+    Rc, r, pen, k_n, k_t = 2.5, R_W, 0.02, 500.0, 300.0
+    N = k_n * pen
+    mu = np.array([0.3, 0.1])
+    # two nodes on the roller top, along its axis, with different mu
+    x = np.array([[0.0, Rc + r - pen, 0.0], [0.0, Rc + r - pen, 5.0]])
+    nodes = np.array([0, 1])
+    cyl = dict(cyl_c=np.zeros((1, 3)), cyl_axis=np.array([[0.0, 0, 1]]), cyl_R=np.array([Rc]),
+               cyl_half_len=np.array([np.inf]), cyl_v=np.zeros((1, 3)))
+    hist = np.zeros((2, 1, 3))
+    dt, V = 1e-3, 1.0                      # nodes slide along the axis (gap unchanged)
+    v = _z(2)
+    v[:, 2] = V
+    W = np.zeros(2)
+    dist = 0.0
+    f_prev = np.zeros(2)
+    for step in range(200):
+        x[:, 2] += V * dt
+        dist += V * dt
+        fn, ft, fc = _z(2), _z(2), np.zeros((1, 3))
+        n = node_cylinder_contact(x, v, nodes, np.full(2, r), mu, k_n=k_n, k_t=k_t, dt=dt,
+                                  hist_ft=hist, f_n=fn, f_t=ft, f_cyl=fc, **cyl)
+        assert n == 2
+        W += 0.5 * (f_prev + ft[:, 2]) * V * dt           # work of f_t (trapezoid)
+        f_prev = ft[:, 2].copy()
+        if step == 0:      # stick: elastic tangential force k_t * displacement < mu N
+            assert np.allclose(ft[:, 2], -k_t * V * dt)
+    assert np.allclose(ft[:, 2], -mu * N)                       # slip: mu N against motion
+    assert np.allclose(fn[:, 1], N)
+    assert np.allclose(fc[0], -(fn + ft)[:, :3].sum(axis=0))    # reaction on the cylinder
+    # dissipated = -work of friction - elastic energy still stored = mu N (dist - mu N / k_t)
+    stored = (mu * N) ** 2 / (2 * k_t)
+    assert -W - stored == pytest.approx(mu * N * (dist - mu * N / k_t), rel=2e-3)
+    # out of reach / beyond the roller's length: nothing, and history is cleared
+    x[:, 1] += 1.0
+    fn, ft, fc = _z(2), _z(2), np.zeros((1, 3))
+    assert node_cylinder_contact(x, v, nodes, np.full(2, r), mu, k_n=k_n, k_t=k_t, dt=dt,
+                                 hist_ft=hist, f_n=fn, f_t=ft, f_cyl=fc, **cyl) == 0
+    assert not hist.any() and not fn.any() and not fc.any()
+
+
+# -------------------------------------------------------------------- node on shell facet
+def _plate(n_el=2, size=4.0, z=0.0):
+    """Flat n_el x n_el quad mesh in the xy plane, normals +z."""
+    g = np.linspace(-size / 2, size / 2, n_el + 1)
+    X, Y = np.meshgrid(g, g, indexing="ij")
+    x = np.stack([X.ravel(), Y.ravel(), np.full(X.size, z)], axis=1)
+    idx = np.arange(X.size).reshape(n_el + 1, n_el + 1)
+    quads = np.array([[idx[i, j], idx[i + 1, j], idx[i + 1, j + 1], idx[i, j + 1]]
+                      for i in range(n_el) for j in range(n_el)])
+    return x, quads
+
+
+def _facet(x, v, nodes, quads, t, sign, pairs, hp, hf, k_n=100.0, k_t=0.0, dt=1e-3, ts=1.0,
+           mu=(0.4, 0.1, 2.0), pen_max=1.0, r=R_W):
+    fn, ft = _z(len(x)), _z(len(x))
+    n = node_facet_contact(x, v, nodes, np.full(len(nodes), r), quads, np.full(len(quads), t),
+                           np.full(len(quads), sign), pairs, k_n, k_t, mu[0], mu[1], mu[2], dt, ts,
+                           pen_max, hp, hf, fn, ft)
+    return n, fn, ft
+
+
+def test_node_on_facet_normal_edge_partition_and_one_sided():
+    xp, quads = _plate(2, 4.0)
+    t, pen, k_n = 0.27, 0.03, 100.0
+    all_pairs = np.array([[0, q] for q in range(4)])
+    for pos in ([0.7, 0.6], [0.0, 0.6], [0.0, 0.0], [0.02, -0.97]):   # interior, edge, corner
+        x = np.vstack([xp, [pos + [R_W + t / 2 - pen]]])
+        hp, hf = new_slot_history(1, 8)
+        n, fn, _ = _facet(x, _z(len(x)), np.array([len(xp)]), quads, t, 1.0, all_pairs, hp, hf)
+        assert fn[-1, 2] == pytest.approx(k_n * pen, rel=1e-9)          # counted exactly once
+        assert fn[:-1, 2].sum() == pytest.approx(-k_n * pen, rel=1e-9)
+        # reaction on the quad nodes by the bilinear weights: moment balance about the node
+        assert np.allclose((fn[:-1, 2, None] * xp[:, :2]).sum(0), -k_n * pen * np.array(pos))
+    # wrong side (sign -1: nodes belong below) and beyond the cut-off: no force
+    x = np.vstack([xp, [[0.5, 0.5, R_W + t / 2 - pen]]])
+    hp, hf = new_slot_history(1, 8)
+    assert _facet(x, _z(len(x)), np.array([len(xp)]), quads, t, -1.0, all_pairs, hp, hf)[0] == 0
+    assert _facet(x, _z(len(x)), np.array([len(xp)]), quads, t, 1.0, all_pairs, hp, hf,
+                  pen_max=0.01)[0] == 0
+
+
+def test_node_sliding_on_facet_eq6_rate_and_dissipation():
+    xp, quads = _plate(4, 8.0)                   # 2 mm quads: the node crosses quad edges
+    t, pen, k_n, k_t = 0.27, 0.02, 100.0, 10.0
+    N = k_n * pen
+    mu_s, mu_k, d_c = 0.4, 0.1, 2.0
+    dt = 1e-3
+    for ts, V in ((1.0, 0.4), (120.0, 30.0)):
+        x = np.vstack([xp, [[-3.0, -0.3, R_W + t / 2 - pen]]])
+        v = _z(len(x))
+        v[-1, 0] = V
+        nodes = np.array([len(xp)])
+        hp, hf = new_slot_history(1, 4)
+        W = 0.0
+        dist = 0.0
+        f_prev = 0.0
+        dt_v = 5.0 / 400 / V                    # travel 5 mm in 400 steps of solver time dt_v
+        for step in range(400):
+            x[-1, 0] += V * dt_v
+            dist += V * dt_v
+            lo_n, hi_n = node_aabbs(x, nodes, np.array([R_W]), 0.1)
+            lo_q, hi_q = quad_aabbs(x, quads, np.full(len(quads), t / 2), 0.1)
+            pairs = box_pairs(lo_n, hi_n, lo_q, hi_q, 2.0, False)
+            n, fn, ft = _facet(x, v, nodes, quads, t, 1.0, pairs, hp, hf, k_t=k_t, dt=dt_v,
+                               ts=ts, mu=(mu_s, mu_k, d_c))
+            W += 0.5 * (f_prev + ft[-1, 0]) * V * dt_v       # work of f_t (trapezoid)
+            f_prev = ft[-1, 0]
+            if step == 0:
+                mu0 = mu_k + (mu_s - mu_k) * math.exp(-d_c * V / ts)
+                assert ft[-1, 0] == pytest.approx(-k_t * V * dt_v)    # stick (k_t dg < mu N)
+                assert k_t * V * dt_v < mu0 * N
+            assert fn[-1, 2] == pytest.approx(N, rel=1e-9)
+            assert ft[:, :3].sum(0) == pytest.approx(np.zeros(3), abs=1e-12)
+        mu = mu_k + (mu_s - mu_k) * math.exp(-d_c * V / ts)      # physical rate V / ts
+        assert ft[-1, 0] == pytest.approx(-mu * N, rel=1e-9)      # kept across 2 quad edges
+        assert -W - (mu * N) ** 2 / (2 * k_t) == pytest.approx(mu * N * (dist - mu * N / k_t),
+                                                                rel=2e-3)
+
+
+# ------------------------------------------------------------------------- cohesive ties
+K = np.array([30.0, 30.0, 30.0])
+D0 = np.array([0.03, 0.03, 0.03])
+DF, ALPHA = 0.08, 2.0
+
+
+def _quad_tie(off=0.185, area=2.0):
+    xp, quads = _plate(1, 4.0)
+    x = np.vstack([xp, [[0.3, -0.2, off]]])
+    tq, ts_ = make_ties(x, [4], [area], quads=quads, quad_t=[0.27], tape_half_t=0.05, tol=0.05)
+    assert len(tq["tie_node"]) == 1 and len(ts_["tie_node"]) == 0
+    return x, quads, tq
+
+
+def _run_quad_tie(x, quads, tq):
+    fc = _z(len(x))
+    args = [tq[k] for k in ("tie_node", "tie_quad", "tie_xi", "tie_sign", "tie_off", "tie_area")]
+    nf = cohesive_ties_quad(x, *args, quads, K, D0, DF, ALPHA, tq["tie_kappa"], tq["tie_D"],
+                            tq["tie_energy"], fc)
+    return nf, fc
+
+
+@pytest.mark.parametrize("direction", [2, 0])          # normal opening, shear
+def test_cohesive_tie_opening_and_shear(direction):
+    x0, quads, tq = _quad_tie()
+    A = tq["tie_area"][0]
+    assert np.allclose(tq["tie_xi"][0], [0.15, -0.1]) and tq["tie_off"][0, 0] == pytest.approx(0.185)
+    deltas = np.concatenate([np.linspace(0, 0.05, 251), np.linspace(0.05, 0.0, 51),
+                             np.linspace(0.0, 0.1, 501)])
+    F, Ds = [], []
+    for d in deltas:
+        x = x0.copy()
+        x[4, direction] += d
+        nf, fc = _run_quad_tie(x, quads, tq)
+        F.append(-fc[4, direction])
+        Ds.append(tq["tie_D"][0])
+        assert np.allclose(fc[:, :3].sum(0), 0.0, atol=1e-12)
+    F, Ds = np.array(F), np.array(Ds)
+    assert np.all(np.diff(Ds) >= 0.0)                                  # D never decreases
+    load = slice(0, 251)
+    i_peak = np.argmax(F[load])
+    assert deltas[i_peak] == pytest.approx(0.03, abs=2e-4)             # peak at delta0
+    assert F[i_peak] == pytest.approx(K[0] * 0.03 * A, rel=1e-3)
+    # unloading from 0.05 along the damaged secant, D frozen
+    D05 = Ds[250]
+    unl = slice(251, 302)
+    assert np.allclose(Ds[unl], D05)
+    assert np.allclose(F[unl], (1 - D05) * K[0] * deltas[unl] * A)
+    # reloading past 0.05 then failure at delta_f: zero traction, D = 1
+    assert F[-1] == 0.0 and Ds[-1] == 1.0 and nf == 1
+    assert F[deltas.size - 501 + 401] == 0.0 < F[deltas.size - 501 + 399]   # fails at 0.08
+    # dissipated energy: incremental and closed form agree with G_c A
+    Gc = cohesive_dissipated_energy(K[0], 0.03, DF, ALPHA, 1.0)
+    assert tq["tie_energy"][0] == pytest.approx(Gc * A, rel=2e-2)
+    assert cohesive_tie_dissipation(tq["tie_kappa"], tq["tie_area"], K, D0, DF, ALPHA)[0] \
+        == pytest.approx(Gc * A, rel=1e-12)
+
+
+def test_cohesive_compression_no_damage_and_rigid_rotation_free():
+    x0, quads, tq = _quad_tie()
+    A = tq["tie_area"][0]
+    x = x0.copy()
+    x[4, 2] -= 0.2                                  # deep compression: penalty, no damage
+    _, fc = _run_quad_tie(x, quads, tq)
+    assert fc[4, 2] == pytest.approx(K[0] * 0.2 * A) and tq["tie_D"][0] == 0.0
+    assert tq["tie_kappa"][0] == 0.0
+    # rigid rotation of tube + tape by 40 deg: no separation, no force (local frame)
+    c, s = math.cos(0.7), math.sin(0.7)
+    Rm = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    _, fc = _run_quad_tie(x0 @ Rm.T + [1.0, 2.0, 3.0], quads, tq)
+    assert np.abs(fc).max() < 1e-12
+    # tape bonded to a wire segment: free of rigid rotations that turn the wire axis (the
+    # twist about the axis itself is not seen by a translations-only kernel)
+    xw = np.array([[0.0, 0, 0], [6, 0, 0], [2.0, 0.2, R_W + 0.05]])
+    tq2, ts2 = make_ties(xw, [2], [1.5], seg=np.array([[0, 1]]), seg_r=[R_W], tape_half_t=0.05)
+    assert len(ts2["tie_node"]) == 1 and ts2["tie_s"][0] == pytest.approx(1 / 3)
+    args = [ts2[k] for k in ("tie_node", "tie_seg", "tie_s", "tie_n0", "tie_t0", "tie_off",
+                             "tie_area")]
+    Rz = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
+    k = np.array([0.0, 0.6, 0.8])            # any rotation axis normal to the wire
+    Kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    Rk = np.eye(3) + math.sin(1.2) * Kx + (1 - math.cos(1.2)) * Kx @ Kx
+    for xx in (xw @ Rz.T + 1.0, xw @ Rk.T - 2.0):
+        fc = _z(3)
+        cohesive_ties_seg(xx, *args, np.array([[0, 1]]), K, D0, DF, ALPHA, ts2["tie_kappa"],
+                          ts2["tie_D"], ts2["tie_energy"], fc)
+        assert np.abs(fc).max() < 1e-12
+    xx = xw.copy()
+    nrm = ts2["tie_n0"][0]
+    xx[2] += 0.01 * nrm
+    fc = _z(3)
+    cohesive_ties_seg(xx, *args, np.array([[0, 1]]), K, D0, DF, ALPHA, ts2["tie_kappa"],
+                      ts2["tie_D"], ts2["tie_energy"], fc)
+    assert np.allclose(fc[2, :3], -K[0] * 0.01 * 1.5 * nrm)
+    assert np.allclose(fc[:2, :3].sum(0), K[0] * 0.01 * 1.5 * nrm)
+    assert fc[1, :3] == pytest.approx(0.5 * fc[0, :3])               # s = 1/3 weights
