@@ -1,0 +1,106 @@
+"""Equivalent smooth shell of the ridged tube (models/tube_equivalent.py): the equivalent and
+the resolved (ridged) wall agree in tension and in ring bending on a short segment."""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import yaml
+from scipy.spatial import cKDTree
+
+from harnesspipe.models.tensile import TubeGeometry, resolution, simulate_axisymmetric_tube
+from harnesspipe.models.tube_equivalent import (equivalent_shell, from_config, ridged_section,
+                                                ring_ovalisation, strip_axial_stiffness)
+from conftest import REPO
+
+CLOSED = dict(E=1559.0, sigma_y=8.6, K=25.6, n=0.12)    # Table 2
+OPEN = dict(E=698.0, sigma_y=8.8, K=23.1, n=0.83)
+
+
+@pytest.fixture(scope="module")
+def config():
+    return yaml.safe_load((REPO / "config" / "config.yaml").read_text())
+
+
+def test_both_conditions_matched():
+    eq = equivalent_shell(**CLOSED)
+    sec = ridged_section()
+    assert eq["E"] * eq["t"] == pytest.approx(eq["axial_stiffness"], rel=1e-12)
+    assert eq["E"] * eq["t"] ** 3 / 12.0 == pytest.approx(CLOSED["E"] * sec["I"], rel=1e-12)
+    assert eq["radius"] == pytest.approx(0.25 * (10.7 + 14.1))
+    assert eq["t_contact"] == pytest.approx(1.7)
+    assert eq["nu"] == 0.0
+    # plasticity scaled with E_eq / E, n unchanged: same yield strain
+    assert eq["sigma_y"] / eq["E"] == pytest.approx(CLOSED["sigma_y"] / CLOSED["E"])
+    assert eq["K"] / eq["E"] == pytest.approx(CLOSED["K"] / CLOSED["E"])
+    assert eq["n"] == CLOSED["n"]
+    # the corrugation: axially ~3 % of a smooth wall, hoop bending ~50 x t^3/12
+    assert 0.02 < eq["axial_stiffness"] / (CLOSED["E"] * 0.27) < 0.04
+    assert 40 < sec["I"] / (0.27 ** 3 / 12) < 70
+
+
+def test_tension_equivalent_vs_ridged_axisymmetric():
+    """Ridged axisymmetric shell (finer mesh and a different strain than the homogenisation)
+    vs. the smooth equivalent's closed form F = 2 pi R t_eq E_eq eps, within 3 %."""
+    for mat in (CLOSED, OPEN):
+        eq = equivalent_shell(**mat)
+        eps = 5.0e-5
+        g = replace(TubeGeometry(), extension=eps * TubeGeometry().gauge)
+        df = simulate_axisymmetric_tube(mat["E"], 1e3 * mat["E"], 0.0, 1.0, 0.42, geometry=g,
+                                        res=resolution("quick", meridian=96, n_steps=2))
+        F_ridged = float(df["force_N"].iloc[-1])
+        F_eq = 2.0 * np.pi * eq["radius"] * eq["t"] * eq["E"] * eps
+        assert F_eq == pytest.approx(F_ridged, rel=0.03)
+
+
+def test_ring_bending_equivalent_vs_ridged_section():
+    """Ovalisation under a diametral line load: equivalent E_eq t_eq^3/12 vs. the ridged
+    wall's E I, I integrated independently on a point grid over the wall region."""
+    g = TubeGeometry()
+    eq = equivalent_shell(**CLOSED)
+    z = np.linspace(0.0, g.pitch, 20001)
+    tree = cKDTree(np.column_stack([z, g.radius(z)]))
+    R = eq["radius"]
+    h = 0.004
+    zz, rr = np.meshgrid(np.arange(0.5 * h, g.pitch, h), np.arange(R - 1.0, R + 1.0, h), indexing="ij")
+    dist, _ = tree.query(np.column_stack([zz.ravel(), rr.ravel()]))
+    wall = dist <= 0.5 * g.wall
+    I_grid = np.sum((rr.ravel()[wall] - R) ** 2) * h * h / g.pitch
+    EI_ridged = CLOSED["E"] * I_grid
+    EI_eq = eq["E"] * eq["t"] ** 3 / 12.0
+    P = 0.1                                                # N/mm
+    d_ridged = ring_ovalisation(P, R, EI_ridged)
+    d_eq = ring_ovalisation(P, R, EI_eq)
+    assert d_eq == pytest.approx(d_ridged, rel=0.03)
+    assert ridged_section()["area"] == pytest.approx(wall.sum() * h * h / g.pitch, rel=0.02)
+
+
+def test_flat_wall_limit_recovers_the_material():
+    """No corrugation (d_o - d_i = 2 t): the equivalent is the wall itself."""
+    g = TubeGeometry(d_inner=12.4 - 0.27, d_outer=12.4 + 0.27)
+    eq = equivalent_shell(1000.0, 10.0, 20.0, 0.5, g)
+    assert eq["t"] == pytest.approx(0.27, rel=5e-3)
+    assert eq["E"] == pytest.approx(1000.0, rel=5e-3)
+
+
+def test_closed_form_strip_is_softer_but_close():
+    eq = equivalent_shell(**CLOSED)
+    k_strip = strip_axial_stiffness(CLOSED["E"], 0.42)
+    assert k_strip == pytest.approx(eq["strip_axial_stiffness"])
+    assert 0.7 < k_strip / eq["axial_stiffness"] < 1.0      # no hoop restraint -> softer
+    eq_s = equivalent_shell(**CLOSED, method="strip")
+    assert eq_s["t"] > eq["t"]
+
+
+def test_mass_per_area_and_config(config):
+    eq = from_config(config, "closed_tube", CLOSED)
+    sec = ridged_section()
+    assert eq["rho"] * eq["t"] == pytest.approx(0.9e-9 * sec["area"])
+    eq_o = from_config(config, "open_tube", OPEN)
+    assert eq_o["t"] == pytest.approx(eq["t"])              # same geometry
+    assert eq_o["E"] / eq["E"] == pytest.approx(OPEN["E"] / CLOSED["E"])
+    with pytest.raises(ValueError):
+        from_config(config, "fabric_tube", CLOSED)
+    with pytest.raises(ValueError):
+        equivalent_shell(-1.0, 1.0, 1.0, 0.5)
