@@ -309,7 +309,8 @@ def _run_quad_tie(x, quads, tq):
 def test_cohesive_tie_opening_and_shear(direction):
     x0, quads, tq = _quad_tie()
     A = tq["tie_area"][0]
-    assert np.allclose(tq["tie_xi"][0], [0.15, -0.1]) and tq["tie_off"][0, 0] == pytest.approx(0.185)
+    assert np.allclose(tq["tie_xi"][0], [0.15, -0.1])
+    assert tq["tie_off"][0, 0] == pytest.approx(0.185)
     deltas = np.concatenate([np.linspace(0, 0.05, 251), np.linspace(0.05, 0.0, 51),
                              np.linspace(0.0, 0.1, 501)])
     F, Ds = [], []

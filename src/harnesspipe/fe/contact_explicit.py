@@ -53,6 +53,7 @@ from harnesspipe.fe.spatial_hash import box_pairs, node_aabbs, quad_aabbs, segme
 PARALLEL_COS = 0.98     # |cos| of two segments above which wire-wire uses the parallel rule
 EDGE_TOL = 0.05         # half width (in xi) of the partition-of-unity band at quad edges
 DEFAULT_MAXS = 8
+CHUNK = 64              # items per parallel task (scratch arrays are allocated per task)
 
 
 def new_slot_history(n_owner, maxs=DEFAULT_MAXS, points=1):
@@ -143,7 +144,7 @@ def _free_slot(hist_partner, owner):
 
 @njit(cache=True)
 def _quad_eval(x, quads, q, xi, eta, X, n, e1):
-    """Point X, unit normal n = unit(X_xi x X_eta) and unit tangent e1 = unit(X_xi) (into X, n, e1)."""
+    """Point X, unit normal n = unit(X_xi x X_eta), unit tangent e1 = unit(X_xi) (written)."""
     for k in range(3):
         X[k] = 0.0
         n[k] = 0.0
@@ -372,79 +373,91 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
     for e in range(seg.shape[0]):
         valence[seg[e, 0]] += 1
         valence[seg[e, 1]] += 1
-    npt = np.zeros(n_pairs, dtype=np.int64)
-    act = np.zeros((n_pairs, 2), dtype=np.bool_)
-    ps = np.zeros((n_pairs, 2))
-    pu = np.zeros((n_pairs, 2))
-    pw = np.zeros((n_pairs, 2))
-    pfn = np.zeros((n_pairs, 2, 3))     # weighted normal force on a's point
-    pft = np.zeros((n_pairs, 2, 3))     # weighted friction force on a's point
-    hnew = np.zeros((n_pairs, 2, 3))    # new friction history (per unit weight)
-    scr = np.zeros((n_pairs, 5, 3))     # scratch: f_old, dg, ds, n, (unused)
+    npt = np.empty(n_pairs, dtype=np.int64)
+    act = np.empty((n_pairs, 2), dtype=np.bool_)
+    ps = np.empty((n_pairs, 2))
+    pu = np.empty((n_pairs, 2))
+    pw = np.empty((n_pairs, 2))
+    pfn = np.empty((n_pairs, 2, 3))     # weighted normal force on a's point
+    pft = np.empty((n_pairs, 2, 3))     # weighted friction force on a's point
+    hnew = np.empty((n_pairs, 2, 3))    # new friction history (per unit weight)
     dt_phys = dt * time_scale
-    for p in prange(n_pairs):
-        a = pairs[p, 0]
-        b = pairs[p, 1]
-        if a > b:
-            a, b = b, a
-        if a == b or seg_body[a] == seg_body[b]:
-            continue
-        m = _segment_points(x, seg, a, b, valence, ps[p], pu[p], pw[p])
-        npt[p] = m
-        if m == 0:
-            continue
-        slot = _find_slot(hist_partner, seg, a, b)
-        a0 = seg[a, 0]
-        a1 = seg[a, 1]
-        b0 = seg[b, 0]
-        b1 = seg[b, 1]
-        rr = seg_r[a] + seg_r[b]
-        fold = scr[p, 0]
-        dg = scr[p, 1]
-        ds = scr[p, 2]
-        nv = scr[p, 3]
-        for k in range(m):
-            s = ps[p, k]
-            u = pu[p, k]
-            dist2 = 0.0
-            for c in range(3):
-                pa = (1 - s) * x[a0, c] + s * x[a1, c]
-                pb = (1 - u) * x[b0, c] + u * x[b1, c]
-                nv[c] = pa - pb
-                dist2 += nv[c] * nv[c]
-            dist = math.sqrt(dist2)
-            gap = dist - rr
-            if gap >= 0.0:
-                continue
-            act[p, k] = True
-            if dist > 1e-12 * rr:
+    n_chunks = (n_pairs + CHUNK - 1) // CHUNK
+    for ch in prange(n_chunks):
+        scr = np.zeros((4, 3))      # per-task scratch
+        for p in range(ch * CHUNK, min(n_pairs, (ch + 1) * CHUNK)):
+            npt[p] = 0
+            act[p, 0] = False
+            act[p, 1] = False
+            for k in range(2):
                 for c in range(3):
-                    nv[c] /= dist
-            else:
-                for c in range(3):
-                    dg[c] = x[a1, c] - x[a0, c]
-                _any_perpendicular(dg, nv)
-            pn = -k_n * gap
-            w = pw[p, k]
-            for c in range(3):
-                pfn[p, k, c] = w * pn * nv[c]
-            if k_t <= 0.0:
+                    pfn[p, k, c] = 0.0
+                    pft[p, k, c] = 0.0
+                    hnew[p, k, c] = 0.0
+            a = pairs[p, 0]
+            b = pairs[p, 1]
+            if a > b:
+                a, b = b, a
+            if a == b or seg_body[a] == seg_body[b]:
                 continue
-            for c in range(3):
-                fold[c] = hist_ft[a, slot, k, c] if slot >= 0 else 0.0
-                dg[c] = dt * ((1 - s) * v[a0, c] + s * v[a1, c]
-                              - (1 - u) * v[b0, c] - u * v[b1, c])
-            _rotate_onto_plane(fold, nv)
-            dgn = _dot(dg, nv)
-            for c in range(3):
-                dg[c] -= dgn * nv[c]
-            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn,
-                                    hnew[p, k], ds)
-            for c in range(3):
-                pft[p, k, c] = -w * hnew[p, k, c]
-        if m == 1:
-            for c in range(3):
-                hnew[p, 1, c] = hnew[p, 0, c]
+            m = _segment_points(x, seg, a, b, valence, ps[p], pu[p], pw[p])
+            npt[p] = m
+            if m == 0:
+                continue
+            slot = -2                        # looked up at the first active point
+            a0 = seg[a, 0]
+            a1 = seg[a, 1]
+            b0 = seg[b, 0]
+            b1 = seg[b, 1]
+            rr = seg_r[a] + seg_r[b]
+            fold = scr[0]
+            dg = scr[1]
+            ds = scr[2]
+            nv = scr[3]
+            for k in range(m):
+                s = ps[p, k]
+                u = pu[p, k]
+                dist2 = 0.0
+                for c in range(3):
+                    pa = (1 - s) * x[a0, c] + s * x[a1, c]
+                    pb = (1 - u) * x[b0, c] + u * x[b1, c]
+                    nv[c] = pa - pb
+                    dist2 += nv[c] * nv[c]
+                dist = math.sqrt(dist2)
+                gap = dist - rr
+                if gap >= 0.0:
+                    continue
+                act[p, k] = True
+                if dist > 1e-12 * rr:
+                    for c in range(3):
+                        nv[c] /= dist
+                else:
+                    for c in range(3):
+                        dg[c] = x[a1, c] - x[a0, c]
+                    _any_perpendicular(dg, nv)
+                pn = -k_n * gap
+                w = pw[p, k]
+                for c in range(3):
+                    pfn[p, k, c] = w * pn * nv[c]
+                if k_t <= 0.0:
+                    continue
+                if slot == -2:
+                    slot = _find_slot(hist_partner, seg, a, b)
+                for c in range(3):
+                    fold[c] = hist_ft[a, slot, k, c] if slot >= 0 else 0.0
+                    dg[c] = dt * ((1 - s) * v[a0, c] + s * v[a1, c]
+                                  - (1 - u) * v[b0, c] - u * v[b1, c])
+                _rotate_onto_plane(fold, nv)
+                dgn = _dot(dg, nv)
+                for c in range(3):
+                    dg[c] -= dgn * nv[c]
+                rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn,
+                                        hnew[p, k], ds)
+                for c in range(3):
+                    pft[p, k, c] = -w * hnew[p, k, c]
+            if m == 1:
+                for c in range(3):
+                    hnew[p, 1, c] = hnew[p, 0, c]
     # serial: commit history, scatter forces
     for i in range(hist_partner.shape[0]):
         for s in range(hist_partner.shape[1]):
@@ -517,54 +530,56 @@ def node_cylinder_contact(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, 
     n_cn = nodes.shape[0]
     n_cyl = cyl_c.shape[0]
     work = np.zeros((n_cn, n_cyl, 3))
-    scr = np.zeros((n_cn, 5, 3))
     count = np.zeros(n_cn, dtype=np.int64)
-    for i in prange(n_cn):
-        nd = nodes[i]
-        nv = scr[i, 0]
-        dg = scr[i, 1]
-        fold = scr[i, 2]
-        ds = scr[i, 3]
-        fnew = scr[i, 4]
-        for c in range(n_cyl):
-            ax0 = cyl_axis[c, 0]
-            ax1 = cyl_axis[c, 1]
-            ax2 = cyl_axis[c, 2]
-            d0 = x[nd, 0] - cyl_c[c, 0]
-            d1 = x[nd, 1] - cyl_c[c, 1]
-            d2 = x[nd, 2] - cyl_c[c, 2]
-            al = d0 * ax0 + d1 * ax1 + d2 * ax2
-            inside = abs(al) <= cyl_half_len[c]
-            nv[0] = d0 - al * ax0
-            nv[1] = d1 - al * ax1
-            nv[2] = d2 - al * ax2
-            dist = math.sqrt(_dot(nv, nv))
-            gap = dist - cyl_R[c] - node_r[i]
-            if (not inside) or gap >= 0.0 or dist <= 0.0:
+    n_chunks = (n_cn + CHUNK - 1) // CHUNK
+    for ch in prange(n_chunks):
+        scr = np.zeros((5, 3))      # per-task scratch
+        for i in range(ch * CHUNK, min(n_cn, (ch + 1) * CHUNK)):
+            nd = nodes[i]
+            nv = scr[0]
+            dg = scr[1]
+            fold = scr[2]
+            ds = scr[3]
+            fnew = scr[4]
+            for c in range(n_cyl):
+                ax0 = cyl_axis[c, 0]
+                ax1 = cyl_axis[c, 1]
+                ax2 = cyl_axis[c, 2]
+                d0 = x[nd, 0] - cyl_c[c, 0]
+                d1 = x[nd, 1] - cyl_c[c, 1]
+                d2 = x[nd, 2] - cyl_c[c, 2]
+                al = d0 * ax0 + d1 * ax1 + d2 * ax2
+                inside = abs(al) <= cyl_half_len[c]
+                nv[0] = d0 - al * ax0
+                nv[1] = d1 - al * ax1
+                nv[2] = d2 - al * ax2
+                dist = math.sqrt(_dot(nv, nv))
+                gap = dist - cyl_R[c] - node_r[i]
+                if (not inside) or gap >= 0.0 or dist <= 0.0:
+                    for k in range(3):
+                        hist_ft[i, c, k] = 0.0
+                    continue
+                count[i] += 1
                 for k in range(3):
-                    hist_ft[i, c, k] = 0.0
-                continue
-            count[i] += 1
-            for k in range(3):
-                nv[k] /= dist
-            pn = -k_n * gap
-            for k in range(3):
-                f_n[nd, k] += pn * nv[k]
-                work[i, c, k] -= pn * nv[k]
-            if k_t <= 0.0 or node_mu[i] <= 0.0:
-                continue
-            for k in range(3):
-                fold[k] = hist_ft[i, c, k]
-                dg[k] = dt * (v[nd, k] - cyl_v[c, k])
-            _rotate_onto_plane(fold, nv)
-            dgn = _dot(dg, nv)
-            for k in range(3):
-                dg[k] -= dgn * nv[k]
-            coulomb_return_map(fold, dg, k_t, node_mu[i], pn, fnew, ds)
-            for k in range(3):
-                hist_ft[i, c, k] = fnew[k]
-                f_t[nd, k] -= fnew[k]
-                work[i, c, k] += fnew[k]
+                    nv[k] /= dist
+                pn = -k_n * gap
+                for k in range(3):
+                    f_n[nd, k] += pn * nv[k]
+                    work[i, c, k] -= pn * nv[k]
+                if k_t <= 0.0 or node_mu[i] <= 0.0:
+                    continue
+                for k in range(3):
+                    fold[k] = hist_ft[i, c, k]
+                    dg[k] = dt * (v[nd, k] - cyl_v[c, k])
+                _rotate_onto_plane(fold, nv)
+                dgn = _dot(dg, nv)
+                for k in range(3):
+                    dg[k] -= dgn * nv[k]
+                coulomb_return_map(fold, dg, k_t, node_mu[i], pn, fnew, ds)
+                for k in range(3):
+                    hist_ft[i, c, k] = fnew[k]
+                    f_t[nd, k] -= fnew[k]
+                    work[i, c, k] += fnew[k]
     n_active = 0
     for i in range(n_cn):
         n_active += count[i]
@@ -605,66 +620,73 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
     Returns the number of active pairs.
     """
     n_pairs = pairs.shape[0]
-    act = np.zeros(n_pairs, dtype=np.bool_)
-    pN = np.zeros((n_pairs, 4))
-    pfn = np.zeros((n_pairs, 3))
-    pft = np.zeros((n_pairs, 3))
-    hnew = np.zeros((n_pairs, 3))
-    scr = np.zeros((n_pairs, 5, 3))
-    prj = np.zeros((n_pairs, 8))
+    act = np.empty(n_pairs, dtype=np.bool_)
+    pN = np.empty((n_pairs, 4))
+    pfn = np.empty((n_pairs, 3))
+    pft = np.empty((n_pairs, 3))
+    hnew = np.empty((n_pairs, 3))
     dt_phys = dt * time_scale
-    for p in prange(n_pairs):
-        i = pairs[p, 0]
-        q = pairs[p, 1]
-        nd = nodes[i]
-        if (quads[q, 0] == nd or quads[q, 1] == nd or quads[q, 2] == nd
-                or quads[q, 3] == nd):
-            continue
-        out = prj[p]
-        _project_quad(x, quads, q, x[nd], False, out)
-        xi = out[0]
-        eta = out[1]
-        w = _ramp(xi) * _ramp(eta)
-        if w <= 0.0:
-            continue
-        nv = scr[p, 0]
-        sg = quad_sign[q]
-        for c in range(3):
-            nv[c] = sg * out[5 + c]
-        dist = 0.0
-        for c in range(3):
-            dist += (x[nd, c] - out[2 + c]) * nv[c]
-        gap = dist - node_r[i] - 0.5 * quad_t[q]
-        if gap >= 0.0 or -gap > pen_max:
-            continue
-        act[p] = True
-        N = pN[p]
-        N[0] = 0.25 * (1 - xi) * (1 - eta)
-        N[1] = 0.25 * (1 + xi) * (1 - eta)
-        N[2] = 0.25 * (1 + xi) * (1 + eta)
-        N[3] = 0.25 * (1 - xi) * (1 + eta)
-        pn = -k_n * gap
-        for c in range(3):
-            pfn[p, c] = w * pn * nv[c]
-        if k_t <= 0.0:
-            continue
-        fold = scr[p, 1]
-        dg = scr[p, 2]
-        ds = scr[p, 3]
-        slot = _find_slot(hist_partner, quads, i, q)
-        for c in range(3):
-            fold[c] = hist_ft[i, slot, c] if slot >= 0 else 0.0
-            vq = 0.0
-            for m in range(4):
-                vq += N[m] * v[quads[q, m], c]
-            dg[c] = dt * (v[nd, c] - vq)
-        _rotate_onto_plane(fold, nv)
-        dgn = _dot(dg, nv)
-        for c in range(3):
-            dg[c] -= dgn * nv[c]
-        rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew[p], ds)
-        for c in range(3):
-            pft[p, c] = -w * hnew[p, c]
+    n_chunks = (n_pairs + CHUNK - 1) // CHUNK
+    for ch in prange(n_chunks):
+        scr = np.zeros((4, 3))      # per-task scratch
+        prj = np.zeros(8)
+        for p in range(ch * CHUNK, min(n_pairs, (ch + 1) * CHUNK)):
+            act[p] = False
+            for c in range(3):
+                pfn[p, c] = 0.0
+                pft[p, c] = 0.0
+                hnew[p, c] = 0.0
+            i = pairs[p, 0]
+            q = pairs[p, 1]
+            nd = nodes[i]
+            if (quads[q, 0] == nd or quads[q, 1] == nd or quads[q, 2] == nd
+                    or quads[q, 3] == nd):
+                continue
+            out = prj
+            _project_quad(x, quads, q, x[nd], False, out)
+            xi = out[0]
+            eta = out[1]
+            w = _ramp(xi) * _ramp(eta)
+            if w <= 0.0:
+                continue
+            nv = scr[0]
+            sg = quad_sign[q]
+            for c in range(3):
+                nv[c] = sg * out[5 + c]
+            dist = 0.0
+            for c in range(3):
+                dist += (x[nd, c] - out[2 + c]) * nv[c]
+            gap = dist - node_r[i] - 0.5 * quad_t[q]
+            if gap >= 0.0 or -gap > pen_max:
+                continue
+            act[p] = True
+            N = pN[p]
+            N[0] = 0.25 * (1 - xi) * (1 - eta)
+            N[1] = 0.25 * (1 + xi) * (1 - eta)
+            N[2] = 0.25 * (1 + xi) * (1 + eta)
+            N[3] = 0.25 * (1 - xi) * (1 + eta)
+            pn = -k_n * gap
+            for c in range(3):
+                pfn[p, c] = w * pn * nv[c]
+            if k_t <= 0.0:
+                continue
+            fold = scr[1]
+            dg = scr[2]
+            ds = scr[3]
+            slot = _find_slot(hist_partner, quads, i, q)
+            for c in range(3):
+                fold[c] = hist_ft[i, slot, c] if slot >= 0 else 0.0
+                vq = 0.0
+                for m in range(4):
+                    vq += N[m] * v[quads[q, m], c]
+                dg[c] = dt * (v[nd, c] - vq)
+            _rotate_onto_plane(fold, nv)
+            dgn = _dot(dg, nv)
+            for c in range(3):
+                dg[c] -= dgn * nv[c]
+            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew[p], ds)
+            for c in range(3):
+                pft[p, c] = -w * hnew[p, c]
     for i in range(hist_partner.shape[0]):
         for s in range(hist_partner.shape[1]):
             hist_partner[i, s] = -1
@@ -732,35 +754,37 @@ def cohesive_ties_quad(x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_are
     Returns the number of fully debonded ties (D >= 1).
     """
     n = tie_node.shape[0]
-    pf = np.zeros((n, 3))
-    scr = np.zeros((n, 5, 3))
-    for j in prange(n):
-        q = tie_quad[j]
-        delta = scr[j, 0]
-        tloc = scr[j, 1]
-        X = scr[j, 2]
-        nq = scr[j, 3]
-        e1 = scr[j, 4]
-        _quad_eval(x, quads, q, tie_xi[j, 0], tie_xi[j, 1], X, nq, e1)
-        sg = tie_sign[j]
-        d0 = x[tie_node[j], 0] - X[0]
-        d1 = x[tie_node[j], 1] - X[1]
-        d2 = x[tie_node[j], 2] - X[2]
-        n0 = sg * nq[0]
-        n1 = sg * nq[1]
-        n2 = sg * nq[2]
-        t0 = n1 * e1[2] - n2 * e1[1]
-        t1 = n2 * e1[0] - n0 * e1[2]
-        t2 = n0 * e1[1] - n1 * e1[0]
-        delta[0] = d0 * n0 + d1 * n1 + d2 * n2 - tie_off[j, 0]
-        delta[1] = d0 * e1[0] + d1 * e1[1] + d2 * e1[2] - tie_off[j, 1]
-        delta[2] = d0 * t0 + d1 * t1 + d2 * t2 - tie_off[j, 2]
-        _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
-                      tie_area, tloc)
-        A = tie_area[j]
-        pf[j, 0] = -A * (tloc[0] * n0 + tloc[1] * e1[0] + tloc[2] * t0)
-        pf[j, 1] = -A * (tloc[0] * n1 + tloc[1] * e1[1] + tloc[2] * t1)
-        pf[j, 2] = -A * (tloc[0] * n2 + tloc[1] * e1[2] + tloc[2] * t2)
+    pf = np.empty((n, 3))
+    n_chunks = (n + CHUNK - 1) // CHUNK
+    for ch in prange(n_chunks):
+        scr = np.zeros((5, 3))      # per-task scratch
+        for j in range(ch * CHUNK, min(n, (ch + 1) * CHUNK)):
+            q = tie_quad[j]
+            delta = scr[0]
+            tloc = scr[1]
+            X = scr[2]
+            nq = scr[3]
+            e1 = scr[4]
+            _quad_eval(x, quads, q, tie_xi[j, 0], tie_xi[j, 1], X, nq, e1)
+            sg = tie_sign[j]
+            d0 = x[tie_node[j], 0] - X[0]
+            d1 = x[tie_node[j], 1] - X[1]
+            d2 = x[tie_node[j], 2] - X[2]
+            n0 = sg * nq[0]
+            n1 = sg * nq[1]
+            n2 = sg * nq[2]
+            t0 = n1 * e1[2] - n2 * e1[1]
+            t1 = n2 * e1[0] - n0 * e1[2]
+            t2 = n0 * e1[1] - n1 * e1[0]
+            delta[0] = d0 * n0 + d1 * n1 + d2 * n2 - tie_off[j, 0]
+            delta[1] = d0 * e1[0] + d1 * e1[1] + d2 * e1[2] - tie_off[j, 1]
+            delta[2] = d0 * t0 + d1 * t1 + d2 * t2 - tie_off[j, 2]
+            _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
+                          tie_area, tloc)
+            A = tie_area[j]
+            pf[j, 0] = -A * (tloc[0] * n0 + tloc[1] * e1[0] + tloc[2] * t0)
+            pf[j, 1] = -A * (tloc[0] * n1 + tloc[1] * e1[1] + tloc[2] * t1)
+            pf[j, 2] = -A * (tloc[0] * n2 + tloc[1] * e1[2] + tloc[2] * t2)
     n_failed = 0
     for j in range(n):
         if tie_D[j] >= 1.0:
@@ -812,39 +836,41 @@ def cohesive_ties_seg(x, tie_node, tie_seg, tie_s, tie_n0, tie_t0, tie_off, tie_
     Returns the number of fully debonded ties.
     """
     n = tie_node.shape[0]
-    pf = np.zeros((n, 3))
-    scr = np.zeros((n, 4, 3))
-    for j in prange(n):
-        e = tie_seg[j]
-        s = tie_s[j]
-        a0 = seg[e, 0]
-        a1 = seg[e, 1]
-        delta = scr[j, 0]
-        tloc = scr[j, 1]
-        ax = scr[j, 2]
-        nn = scr[j, 3]
-        for c in range(3):
-            ax[c] = x[a1, c] - x[a0, c]
-        L = math.sqrt(_dot(ax, ax))
-        for c in range(3):
-            ax[c] /= L
-        _transport(tie_t0[j], ax, tie_n0[j], nn)
-        t0 = nn[1] * ax[2] - nn[2] * ax[1]
-        t1 = nn[2] * ax[0] - nn[0] * ax[2]
-        t2 = nn[0] * ax[1] - nn[1] * ax[0]
-        nd = tie_node[j]
-        d0 = x[nd, 0] - (1 - s) * x[a0, 0] - s * x[a1, 0]
-        d1 = x[nd, 1] - (1 - s) * x[a0, 1] - s * x[a1, 1]
-        d2 = x[nd, 2] - (1 - s) * x[a0, 2] - s * x[a1, 2]
-        delta[0] = d0 * nn[0] + d1 * nn[1] + d2 * nn[2] - tie_off[j, 0]
-        delta[1] = d0 * ax[0] + d1 * ax[1] + d2 * ax[2] - tie_off[j, 1]
-        delta[2] = d0 * t0 + d1 * t1 + d2 * t2 - tie_off[j, 2]
-        _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
-                      tie_area, tloc)
-        A = tie_area[j]
-        pf[j, 0] = -A * (tloc[0] * nn[0] + tloc[1] * ax[0] + tloc[2] * t0)
-        pf[j, 1] = -A * (tloc[0] * nn[1] + tloc[1] * ax[1] + tloc[2] * t1)
-        pf[j, 2] = -A * (tloc[0] * nn[2] + tloc[1] * ax[2] + tloc[2] * t2)
+    pf = np.empty((n, 3))
+    n_chunks = (n + CHUNK - 1) // CHUNK
+    for ch in prange(n_chunks):
+        scr = np.zeros((4, 3))      # per-task scratch
+        for j in range(ch * CHUNK, min(n, (ch + 1) * CHUNK)):
+            e = tie_seg[j]
+            s = tie_s[j]
+            a0 = seg[e, 0]
+            a1 = seg[e, 1]
+            delta = scr[0]
+            tloc = scr[1]
+            ax = scr[2]
+            nn = scr[3]
+            for c in range(3):
+                ax[c] = x[a1, c] - x[a0, c]
+            L = math.sqrt(_dot(ax, ax))
+            for c in range(3):
+                ax[c] /= L
+            _transport(tie_t0[j], ax, tie_n0[j], nn)
+            t0 = nn[1] * ax[2] - nn[2] * ax[1]
+            t1 = nn[2] * ax[0] - nn[0] * ax[2]
+            t2 = nn[0] * ax[1] - nn[1] * ax[0]
+            nd = tie_node[j]
+            d0 = x[nd, 0] - (1 - s) * x[a0, 0] - s * x[a1, 0]
+            d1 = x[nd, 1] - (1 - s) * x[a0, 1] - s * x[a1, 1]
+            d2 = x[nd, 2] - (1 - s) * x[a0, 2] - s * x[a1, 2]
+            delta[0] = d0 * nn[0] + d1 * nn[1] + d2 * nn[2] - tie_off[j, 0]
+            delta[1] = d0 * ax[0] + d1 * ax[1] + d2 * ax[2] - tie_off[j, 1]
+            delta[2] = d0 * t0 + d1 * t1 + d2 * t2 - tie_off[j, 2]
+            _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
+                          tie_area, tloc)
+            A = tie_area[j]
+            pf[j, 0] = -A * (tloc[0] * nn[0] + tloc[1] * ax[0] + tloc[2] * t0)
+            pf[j, 1] = -A * (tloc[0] * nn[1] + tloc[1] * ax[1] + tloc[2] * t1)
+            pf[j, 2] = -A * (tloc[0] * nn[2] + tloc[1] * ax[2] + tloc[2] * t2)
     n_failed = 0
     for j in range(n):
         if tie_D[j] >= 1.0:
