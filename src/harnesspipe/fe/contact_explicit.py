@@ -612,70 +612,104 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
         (``new_slot_history(n_cn, maxs)``).
     f_n, f_t : outputs, ADDED.  The node receives F, the quad nodes -F N_i(xi, eta).
 
-    Gap: signed distance of the node centre to the mid-surface along the oriented normal
-    at its projection (xi, eta) (Gauss-Newton on the bilinear surface), minus r + t/2.
-    A projection in the band |xi|, |eta| <= 1 + EDGE_TOL is accepted with the weight
-    ``ramp(xi) ramp(eta)`` (1 inside, 1/2 on an edge), a partition of unity over
-    neighbouring quads, so a node sliding across an edge is neither doubled nor dropped.
-    Returns the number of active pairs.
+    Gap: distance of the node centre to the CLOSEST POINT of the facets' mid-surfaces
+    (Gauss-Newton projection clamped to the quad, so that at edges and corners the closest
+    point lies on the boundary), minus r + t/2.  Each node contacts at most its closest
+    facet of the set: the distance to a polyhedral surface is continuous and its gradient is
+    the unit vector to the closest point, so the penalty energy 1/2 k gap^2 is a potential
+    -- the contact is conservative also where a node slides over a convex kink (under the
+    loading pin the tube folds towards the wires), where a projection-along-normal rule
+    has a dead zone of width ~ 2 (r + t/2) tan(kink/2) through which nodes sink and then
+    get pushed out with energy that was never stored.  The force direction is the unit
+    vector from the closest point to the node (the facet normal inside a facet); a node
+    already behind the mid-surface (side test ``quad_sign * n . d < 0``) is pushed along the
+    facet normal, up to the penetration ``pen_max``.  Limitation: one contact per node and
+    set, so a node pinched between two opposite walls of the same set (a tube flattened
+    below one wire diameter) only sees the nearer one.
+    Returns the number of active contacts.
     """
     n_pairs = pairs.shape[0]
-    act = np.empty(n_pairs, dtype=np.bool_)
-    pN = np.empty((n_pairs, 4))
-    pfn = np.empty((n_pairs, 3))
-    pft = np.empty((n_pairs, 3))
-    hnew = np.empty((n_pairs, 3))
+    n_cn = nodes.shape[0]
     dt_phys = dt * time_scale
+    pd = np.empty((n_pairs, 9))     # xi, eta, dist(signed), n(3) force direction, X(3)
     n_chunks = (n_pairs + CHUNK - 1) // CHUNK
     for ch in prange(n_chunks):
-        scr = np.zeros((4, 3))      # per-task scratch
         prj = np.zeros(8)
         for p in range(ch * CHUNK, min(n_pairs, (ch + 1) * CHUNK)):
-            act[p] = False
-            for c in range(3):
-                pfn[p, c] = 0.0
-                pft[p, c] = 0.0
-                hnew[p, c] = 0.0
             i = pairs[p, 0]
             q = pairs[p, 1]
             nd = nodes[i]
+            pd[p, 2] = np.inf
             if (quads[q, 0] == nd or quads[q, 1] == nd or quads[q, 2] == nd
                     or quads[q, 3] == nd):
                 continue
-            out = prj
-            _project_quad(x, quads, q, x[nd], False, out)
-            xi = out[0]
-            eta = out[1]
-            w = _ramp(xi) * _ramp(eta)
-            if w <= 0.0:
-                continue
-            nv = scr[0]
+            _project_quad(x, quads, q, x[nd], True, prj)
+            d0 = x[nd, 0] - prj[2]
+            d1 = x[nd, 1] - prj[3]
+            d2 = x[nd, 2] - prj[4]
+            dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
             sg = quad_sign[q]
+            side = sg * (d0 * prj[5] + d1 * prj[6] + d2 * prj[7])
+            pd[p, 0] = prj[0]
+            pd[p, 1] = prj[1]
+            pd[p, 6] = prj[2]
+            pd[p, 7] = prj[3]
+            pd[p, 8] = prj[4]
+            if side >= 0.0 and dist > 1e-12:
+                pd[p, 2] = dist
+                pd[p, 3] = d0 / dist
+                pd[p, 4] = d1 / dist
+                pd[p, 5] = d2 / dist
+            else:                    # behind the mid-surface: push out along the normal
+                pd[p, 2] = -dist
+                pd[p, 3] = sg * prj[5]
+                pd[p, 4] = sg * prj[6]
+                pd[p, 5] = sg * prj[7]
+    # closest facet per node (pairs are grouped by node)
+    best = -np.ones(n_cn, dtype=np.int64)
+    for p in range(n_pairs):
+        i = pairs[p, 0]
+        if not np.isfinite(pd[p, 2]):
+            continue
+        b = best[i]
+        if b < 0 or abs(pd[p, 2]) < abs(pd[b, 2]):
+            best[i] = p
+    hist_old = hist_ft.copy()
+    part_old = hist_partner.copy()
+    for i in range(hist_partner.shape[0]):
+        for s in range(hist_partner.shape[1]):
+            hist_partner[i, s] = -1
+    fold = np.zeros(3)
+    dg = np.zeros(3)
+    ds = np.zeros(3)
+    hnew = np.zeros(3)
+    nv = np.zeros(3)
+    N = np.zeros(4)
+    n_active = 0
+    for i in range(n_cn):
+        p = best[i]
+        if p < 0:
+            continue
+        q = pairs[p, 1]
+        nd = nodes[i]
+        gap = pd[p, 2] - node_r[i] - 0.5 * quad_t[q]
+        if gap >= 0.0 or -gap > pen_max:
+            continue
+        n_active += 1
+        xi = pd[p, 0]
+        eta = pd[p, 1]
+        N[0] = 0.25 * (1 - xi) * (1 - eta)
+        N[1] = 0.25 * (1 + xi) * (1 - eta)
+        N[2] = 0.25 * (1 + xi) * (1 + eta)
+        N[3] = 0.25 * (1 - xi) * (1 + eta)
+        pn = -k_n * gap
+        for c in range(3):
+            nv[c] = pd[p, 3 + c]
+            hnew[c] = 0.0
+        if k_t > 0.0:
+            slot = _find_slot(part_old, quads, i, q)
             for c in range(3):
-                nv[c] = sg * out[5 + c]
-            dist = 0.0
-            for c in range(3):
-                dist += (x[nd, c] - out[2 + c]) * nv[c]
-            gap = dist - node_r[i] - 0.5 * quad_t[q]
-            if gap >= 0.0 or -gap > pen_max:
-                continue
-            act[p] = True
-            N = pN[p]
-            N[0] = 0.25 * (1 - xi) * (1 - eta)
-            N[1] = 0.25 * (1 + xi) * (1 - eta)
-            N[2] = 0.25 * (1 + xi) * (1 + eta)
-            N[3] = 0.25 * (1 - xi) * (1 + eta)
-            pn = -k_n * gap
-            for c in range(3):
-                pfn[p, c] = w * pn * nv[c]
-            if k_t <= 0.0:
-                continue
-            fold = scr[1]
-            dg = scr[2]
-            ds = scr[3]
-            slot = _find_slot(hist_partner, quads, i, q)
-            for c in range(3):
-                fold[c] = hist_ft[i, slot, c] if slot >= 0 else 0.0
+                fold[c] = hist_old[i, slot, c] if slot >= 0 else 0.0
                 vq = 0.0
                 for m in range(4):
                     vq += N[m] * v[quads[q, m], c]
@@ -684,31 +718,18 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
             dgn = _dot(dg, nv)
             for c in range(3):
                 dg[c] -= dgn * nv[c]
-            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew[p], ds)
+            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew, ds)
+            hist_partner[i, 0] = q
             for c in range(3):
-                pft[p, c] = -w * hnew[p, c]
-    for i in range(hist_partner.shape[0]):
-        for s in range(hist_partner.shape[1]):
-            hist_partner[i, s] = -1
-    n_active = 0
-    for p in range(n_pairs):
-        if not act[p]:
-            continue
-        n_active += 1
-        i = pairs[p, 0]
-        q = pairs[p, 1]
-        nd = nodes[i]
-        slot = _free_slot(hist_partner, i)
-        if slot >= 0:
-            hist_partner[i, slot] = q
-            for c in range(3):
-                hist_ft[i, slot, c] = hnew[p, c]
+                hist_ft[i, 0, c] = hnew[c]
         for c in range(3):
-            f_n[nd, c] += pfn[p, c]
-            f_t[nd, c] += pft[p, c]
+            fnc = pn * nv[c]
+            ftc = -hnew[c]
+            f_n[nd, c] += fnc
+            f_t[nd, c] += ftc
             for m in range(4):
-                f_n[quads[q, m], c] -= pN[p, m] * pfn[p, c]
-                f_t[quads[q, m], c] -= pN[p, m] * pft[p, c]
+                f_n[quads[q, m], c] -= N[m] * fnc
+                f_t[quads[q, m], c] -= N[m] * ftc
     return n_active
 
 
@@ -716,9 +737,18 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
 @njit(cache=True)
 def _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
                   tie_area, tloc):
-    """Eqs. 7-10 at one tie; updates kappa, D (never decreasing) and the dissipated energy."""
+    """Eqs. 7-10 at one tie; updates kappa, D (never decreasing) and the dissipated energy.
+
+    A fully debonded tie (D = 1) carries nothing, not even the compressive penalty of
+    eq. 7: its fixed target point is no longer where the surfaces touch once they have
+    separated and slid, and a penalty acting there would push with no stored energy to
+    draw on.  Contact after debonding is the contact algorithms' job."""
     D_old = tie_D[j]
     D, kappa = cohesive_traction(delta, K, delta0, delta_mf, alpha, tie_kappa[j], D_old, tloc)
+    if D >= 1.0:
+        tloc[0] = 0.0
+        tloc[1] = 0.0
+        tloc[2] = 0.0
     if D > D_old:
         dn = max(delta[0], 0.0)
         y = 0.5 * (K[0] * dn * dn + K[1] * delta[1] * delta[1] + K[2] * delta[2] * delta[2])
@@ -803,7 +833,65 @@ def cohesive_ties_quad(x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_are
             f_c[quads[q, 1], c] -= N1 * f
             f_c[quads[q, 2], c] -= N2 * f
             f_c[quads[q, 3], c] -= N3 * f
+        _arm_forces(x, quads, q, xi, eta, tie_sign[j] * tie_off[j, 0], tie_off[j, 1], pf[j], f_c)
     return n_failed
+
+
+@njit(cache=True)
+def _arm_forces(x, quads, q, xi, eta, a_n, a_s, p_node, f_c):
+    """Forces on the quad nodes from the tie's lever arm (conservative ties).
+
+    The tie acts at the offset point ``X + a_n n + a_s e1`` of the quad (``a_n``: the
+    signed normal offset, tape mid-surface to covering mid-surface; ``a_s``: along the
+    unit tangent e1 = X_xi/|X_xi|), and n and e1 turn with the quad.  For a potential
+    U(x_node - X - a_n n - a_s e1) the quad nodes receive, beyond ``-p N_i``, the terms
+    ``-(dn/dx_i)^T p a_n - (de1/dx_i)^T p a_s`` (``p`` the force on the tied node) with
+    ``dn/dx_i = P (N_i,xi [X_eta]x^T ... )/|c|``, c = X_xi x X_eta, P = I - n n^T, and
+    ``de1/dx_i = (I - e1 e1^T) N_i,xi / |X_xi|``.  Without them a tie with a lever arm
+    is not conservative and creates energy as the covering rotates.  The arm along the
+    third axis t = n x e1 is neglected (make_ties puts the tape node on the normal, so
+    that offset vanishes to round-off).
+    """
+    Xx0 = Xx1 = Xx2 = 0.0
+    Xe0 = Xe1 = Xe2 = 0.0
+    for m in range(4):
+        sx = -1.0 if (m == 0 or m == 3) else 1.0
+        se = -1.0 if (m == 0 or m == 1) else 1.0
+        dx = 0.25 * sx * (1 + se * eta)
+        de = 0.25 * se * (1 + sx * xi)
+        nd = quads[q, m]
+        Xx0 += dx * x[nd, 0]
+        Xx1 += dx * x[nd, 1]
+        Xx2 += dx * x[nd, 2]
+        Xe0 += de * x[nd, 0]
+        Xe1 += de * x[nd, 1]
+        Xe2 += de * x[nd, 2]
+    c0 = Xx1 * Xe2 - Xx2 * Xe1
+    c1 = Xx2 * Xe0 - Xx0 * Xe2
+    c2 = Xx0 * Xe1 - Xx1 * Xe0
+    cn = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+    n0, n1, n2 = c0 / cn, c1 / cn, c2 / cn
+    lx = math.sqrt(Xx0 * Xx0 + Xx1 * Xx1 + Xx2 * Xx2)
+    e0, e1_, e2 = Xx0 / lx, Xx1 / lx, Xx2 / lx
+    # f = force the quad receives at the arm end = -p_node
+    f0, f1, f2 = -p_node[0], -p_node[1], -p_node[2]
+    fn = f0 * n0 + f1 * n1 + f2 * n2
+    g0, g1, g2 = f0 - fn * n0, f1 - fn * n1, f2 - fn * n2          # P f
+    fe = f0 * e0 + f1 * e1_ + f2 * e2
+    h0, h1, h2 = f0 - fe * e0, f1 - fe * e1_, f2 - fe * e2        # (I - e1 e1^T) f
+    for m in range(4):
+        sx = -1.0 if (m == 0 or m == 3) else 1.0
+        se = -1.0 if (m == 0 or m == 1) else 1.0
+        dx = 0.25 * sx * (1 + se * eta)
+        de = 0.25 * se * (1 + sx * xi)
+        # (dn/dx_m)^T g = (dx X_eta x g - de X_xi x g) / |c|
+        r0 = (dx * (Xe1 * g2 - Xe2 * g1) - de * (Xx1 * g2 - Xx2 * g1)) / cn
+        r1 = (dx * (Xe2 * g0 - Xe0 * g2) - de * (Xx2 * g0 - Xx0 * g2)) / cn
+        r2 = (dx * (Xe0 * g1 - Xe1 * g0) - de * (Xx0 * g1 - Xx1 * g0)) / cn
+        nd = quads[q, m]
+        f_c[nd, 0] += a_n * r0 + a_s * dx * h0 / lx
+        f_c[nd, 1] += a_n * r1 + a_s * dx * h1 / lx
+        f_c[nd, 2] += a_n * r2 + a_s * dx * h2 / lx
 
 
 @njit(cache=True)

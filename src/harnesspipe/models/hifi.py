@@ -1,0 +1,458 @@
+"""High-fidelity three-point bending of composite wire bundles (Sec. 4.1).
+
+The virtual test of Fig. 10: the wires are fibre beams at their places in the bundle
+section, the tube, tape and fabric are shells, the rollers and the loading pin
+(feeder) are rigid 5 mm cylinders; wire-wire, wire-covering and pin-covering
+contacts carry Coulomb friction (eq. 6 between wires, mu_rtb / mu_rtp at the pins),
+the tape is bonded to the tube and to the wire ends by the damaging cohesive law of
+eqs. 7-10, and the whole is integrated by explicit central differences with mass
+scaling f_m and the stable step of eq. 11 (:mod:`harnesspipe.fe.dynamics`).
+
+Time.  The test pushes the feeder 30 mm at 0.5 mm/s: 60 s of physical time
+(``t_phys``).  The simulation runs it in ``t_total`` simulated seconds (the paper:
+1 s with f_m = 25) with the smooth-step amplitude; eq. 6 needs slip rates in
+physical time, so contact kernels get ``time_scale = t_phys / t_total``.
+
+Energies (families of forces ON the nodes, see :mod:`harnesspipe.fe.dynamics`):
+``internal`` (beams and shells: elastic + plastic; the plastic part is computed in
+closed form from the hardening history), ``contact`` (penalty energy of all normal
+contacts), ``friction`` (wire-wire, wire-covering and pin dissipation), ``cohesive``
+(tape bonds: elastic + damage dissipation), ``damping`` (mass-proportional
+damping, zero unless set) and the work ``W_ext`` of the moving feeder.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+FAMILIES = ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive", "damping")
+
+import time
+from dataclasses import dataclass, field
+
+import numba
+import pandas as pd
+
+from harnesspipe.fe import contact_explicit as ce
+from harnesspipe.fe.dynamics import DynamicsSettings, integrate
+from harnesspipe.fe.plane_stress import fabric_shear_modulus
+from harnesspipe.fe.rotation import rotate_nodes
+from harnesspipe.fe.shell_bt import (init_shell_state, shell_energies, shell_forces,
+                                     shell_lumped_mass, shell_stable_step)
+from harnesspipe.fe.spatial_hash import box_pairs, node_aabbs, quad_aabbs, segment_aabbs
+from harnesspipe.models import hifi_mesh as hm
+from harnesspipe.models.hifi_parts import Pins, Wires
+from harnesspipe.models.tube_equivalent import from_config as tube_equivalent
+
+SEARCH_MARGIN = 0.5      # mm added to every contact bounding box between searches
+TIE_TOL = {hm.TIE_COVERING: 0.1, hm.TIE_WIRES: 0.5, hm.TIE_TAPE: 0.05}   # mm, see make_ties
+
+
+@dataclass
+class HifiInputs:
+    """Everything one run needs, as plain values (see :func:`harnesspipe.stages.hifi.parameters`)."""
+
+    case: dict                   # config ``cases`` entry
+    config: dict                 # the whole config (materials, coverings, three_point)
+    interface: dict              # mu_s, mu_k, d_c, K_nn.., mu_rtb, mu_rtp, delta0, delta_f, alpha_d, E2_over_E1
+    explicit: dict               # t_total (profile), t_phys, f_m, safety, mass_damping, penalty, search_every
+    resolution: dict             # mesh resolution and fibre section (n_rings, n_sectors)
+    coverings: dict              # E, sigma_y, K, n per covering (tensile stage)
+
+
+def _shell_materials(mesh, inp: HifiInputs):
+    """Per-element (mat row, stiffness thickness, density) of the shells (fe/shell_bt layout)."""
+    cfg, f_m = inp.config, inp.explicit["f_m"]
+    n = mesh.shell_conn.shape[0]
+    mat = np.zeros((n, 6))
+    thick = np.zeros(n)
+    rho = np.zeros(n)
+    tape = cfg["materials"]["pvc_tape"]
+    sel = mesh.shell_part == hm.PART_TAPE
+    mat[sel] = [tape["E"], tape["nu"], tape["sigma_y"], tape["K"], tape["n"], 0.0]
+    thick[sel] = tape["thickness"]
+    rho[sel] = tape["rho"]
+    cov = inp.case["covering"]
+    sel = mesh.shell_part == hm.PART_TUBE
+    if sel.any():
+        eq = tube_equivalent(cfg, cov, inp.coverings[cov])
+        mat[sel] = [eq["E"], eq["nu"], eq["sigma_y"], eq["K"], eq["n"], 0.0]
+        thick[sel] = eq["t"]
+        rho[sel] = eq["rho"]
+    sel = mesh.shell_part == hm.PART_FABRIC
+    if sel.any():
+        fab = cfg["coverings"]["fabric_tube"]
+        E1 = inp.coverings["fabric_tube"]["E"]
+        E2 = inp.interface["E2_over_E1"] * E1
+        nu12 = fab["nu12"]
+        mat[sel] = [E1, E2, nu12, fabric_shear_modulus(E1, E2, nu12), 0.0, 1.0]
+        thick[sel] = fab["t"]
+        rho[sel] = cfg["materials"][fab["material"]]["rho"]
+    return mat, thick, f_m * rho
+
+
+class HifiSystem:
+    """The assembled virtual three-point test; the system protocol of :mod:`harnesspipe.fe.dynamics`."""
+
+    families = FAMILIES
+    driven = "pin_contact"      # the family the pins' external work is credited to
+
+    def __init__(self, mesh, inp: HifiInputs):
+        self.mesh, self.inp = mesh, inp
+        ex, itf = inp.explicit, inp.interface
+        self.T = float(ex["t_total"])
+        self.time_scale = float(ex["t_phys"]) / self.T
+        n = mesh.n_nodes
+        self.x = np.ascontiguousarray(mesh.X, dtype=float).copy()
+        self.quat = np.zeros((n, 4))
+        self.quat[:, 0] = 1.0
+        self.nw = mesh.n_wire_nodes
+        types = [dict(inp.config["materials"][f"wire_type{t}"]) for t in (1, 2)]
+        self.wires = Wires(mesh.X, mesh.beam_conn, mesh.wire_type[mesh.beam_wire] - 1, types,
+                           inp.resolution["n_rings"], inp.resolution["n_sectors"], 3, ex["f_m"])
+        self.mass = np.zeros((n, 6))
+        self.wires.add_mass(self.mass)
+        self.has_shells = mesh.shell_conn.shape[0] > 0
+        if self.has_shells:
+            self.sconn = np.ascontiguousarray(mesh.shell_conn, dtype=np.int64)
+            self.smat, self.sthick, self.srho = _shell_materials(mesh, inp)
+            self.sstate = init_shell_state(mesh.X, self.sconn, self.sthick, mesh.shell_axis)
+            self.s_el = np.zeros((self.sconn.shape[0], 4, 6))
+            shell_lumped_mass(mesh.X, self.sconn, self.sthick, self.srho, self.mass)
+        tp = inp.config["three_point"]
+        self.pins = Pins(mesh.rollers["centres"], mesh.rollers["radius"], 2, tp["deflection"], self.T)
+        self.free = np.ones((n, 6), dtype=np.bool_)
+        centre = int(np.argmin(np.hypot(*mesh.wire_yz.T)))
+        mid = mesh.wire_nodes[centre, mesh.wire_nodes.shape[1] // 2]
+        self.free[mid, 0] = self.free[mid, 2] = False    # axial and lateral rigid-body modes
+        self.c_damp = float(ex["mass_damping"])
+        self.F = np.zeros((len(FAMILIES), n, 6))
+        self._scratch = np.zeros((n, 6))
+        self.seg = np.ascontiguousarray(mesh.beam_conn, dtype=np.int64)
+        self.seg_r = mesh.wire_radius[mesh.beam_wire].astype(float)
+        self.seg_body = mesh.beam_wire.astype(np.int64)
+        self._setup_ties()
+        self.dt0 = 2.0 / np.hypot(2.0 / self.element_step(), 2.0 / self.tie_step())
+        self._setup_contacts()
+        self.calls = 0
+        self.pairs_max = 0
+        self.active = 0
+        self.f_pin_prev = np.zeros(3)
+        self.c_prev = self.pins.centres.copy()
+
+    # -- set-up -----------------------------------------------------------------
+    def element_step(self) -> float:
+        dt = self.wires.stable_step(self.x)
+        if self.has_shells:
+            dt = min(dt, shell_stable_step(self.x, self.sconn, self.sthick, self.smat, self.srho))
+        return dt
+
+    def _penalty(self, masses) -> float:
+        """k = penalty m / dt^2: omega dt = sqrt(penalty) per contact, explicit-stable."""
+        return self.inp.explicit["penalty"] * float(np.min(masses)) / self.dt0**2
+
+    def _setup_contacts(self):
+        mesh, itf = self.mesh, self.inp.interface
+        m = self.mass[:, 0]
+        self.k_ww = self._penalty(m[:self.nw])
+        self.ww_hist = ce.new_slot_history(self.seg.shape[0], points=2)
+        self.ww_pairs = np.zeros((0, 2), dtype=np.int64)
+        # pins: one node group per friction coefficient (own penalty from its lightest node)
+        part_nodes = {}
+        if self.has_shells:
+            for part in (hm.PART_TUBE, hm.PART_FABRIC, hm.PART_TAPE):
+                sel = mesh.shell_part == part
+                if sel.any():
+                    nodes = np.unique(self.sconn[sel])
+                    r = np.zeros(nodes.size)
+                    np.maximum.at(r, np.searchsorted(nodes, self.sconn[sel].ravel()),
+                                  np.repeat(0.5 * mesh.shell_thickness[sel], 4))
+                    part_nodes[part] = (nodes, r)
+        wn = np.arange(self.nw, dtype=np.int64)
+        wr = mesh.wire_radius[np.repeat(np.arange(mesh.n_wires), mesh.wire_nodes.shape[1])]
+        groups = [(wn, wr, itf["mu_rtb"])]
+        for part, (nodes, r) in part_nodes.items():
+            mu = itf["mu_rtp"] if part == hm.PART_TAPE else itf["mu_rtb"]
+            groups.append((nodes[~np.isin(nodes, wn)], r[~np.isin(nodes, wn)], mu))
+        self.pin_groups = []
+        for nodes, r, mu in groups:
+            k = self._penalty(m[nodes])
+            self.pin_groups.append(dict(nodes=nodes, r=np.ascontiguousarray(r, dtype=float),
+                                        mu=np.full(nodes.size, float(mu)), k=k,
+                                        hist=np.zeros((nodes.size, 3, 3))))
+        # wires (and tape) against the covering and tape facets
+        self.facet_sets = []
+        if self.has_shells:
+            cov = np.flatnonzero(mesh.shell_part != hm.PART_TAPE)
+            if cov.size:
+                self._facet_set(wn, wr, cov, -1.0)
+            tape = np.flatnonzero(mesh.shell_part == hm.PART_TAPE)
+            ends = tape[np.isin(mesh.shell_group[tape], (hm.GROUP_END_LEFT, hm.GROUP_END_RIGHT))]
+            if ends.size:
+                self._facet_set(wn, wr, ends, -1.0)
+            if mesh.fabric_overlap_outer.size:
+                inner = np.flatnonzero(np.all(np.isin(self.sconn, mesh.fabric_overlap_inner), axis=1))
+                r = np.full(mesh.fabric_overlap_outer.size, 0.2)   # < half the 0.48 layer gap
+                self._facet_set(mesh.fabric_overlap_outer.astype(np.int64), r, inner, 1.0)
+
+    def _facet_set(self, nodes, r, quads, sign):
+        itf = self.inp.interface
+        q = np.ascontiguousarray(self.sconn[quads])
+        qn = np.unique(q)
+        k = self._penalty(np.r_[self.mass[nodes, 0], self.mass[qn, 0]])
+        t = np.ascontiguousarray(self.mesh.shell_thickness[quads], dtype=float)
+        fs = dict(nodes=np.ascontiguousarray(nodes, dtype=np.int64),
+                  r=np.ascontiguousarray(r, float).copy(), quads=q, t=t,
+                  sign=np.full(q.shape[0], sign), k=k, pen_max=float(np.max(r) + 0.5 * np.max(t)),
+                  hist=ce.new_slot_history(nodes.size), pairs=np.zeros((0, 2), dtype=np.int64),
+                  mu=(itf["mu_s"], itf["mu_k"], itf["d_c"]))
+        self._adjust_initial_gaps(fs)
+        self.facet_sets.append(fs)
+
+    def _adjust_initial_gaps(self, fs):
+        """Strain-free start: shrink the contact radius of nodes that begin inside a facet
+        (faceted tape wrapped on a round or hexagonal bundle) by their initial penetration,
+        found with a unit penalty, so that no contact force exists at t = 0."""
+        for _ in range(30):      # edge nodes carry weight 1/2: converges geometrically
+            self._search_set(fs)
+            f_n = np.zeros((self.mesh.n_nodes, 6))
+            hist = ce.new_slot_history(fs["nodes"].size)
+            ce.node_facet_contact(self.x, np.zeros_like(f_n), fs["nodes"], fs["r"], fs["quads"],
+                                  fs["t"], fs["sign"], fs["pairs"], 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+                                  1.0, fs["pen_max"], hist[0], hist[1], f_n, np.zeros_like(f_n))
+            pen = np.linalg.norm(f_n[fs["nodes"], :3], axis=1)
+            if pen.max() < 1e-9:
+                return
+            fs["r"] = np.maximum(fs["r"] - pen - 1e-3, 0.0)
+
+    def _setup_ties(self):
+        mesh, itf = self.mesh, self.inp.interface
+        self.ties = []
+        if not self.has_shells or mesh.tie_nodes.size == 0:
+            return
+        tape = self.sconn[mesh.shell_part == hm.PART_TAPE]
+        tape_t = 0.5 * self.inp.config["materials"]["pvc_tape"]["thickness"]
+        for target in (hm.TIE_COVERING, hm.TIE_WIRES, hm.TIE_TAPE):
+            sel = mesh.tie_target == target
+            if not sel.any():
+                continue
+            nodes, area = mesh.tie_nodes[sel], mesh.tie_area[sel]
+            if target == hm.TIE_WIRES:
+                _, ties = ce.make_ties(self.x, nodes, area, seg=self.seg, seg_r=self.seg_r,
+                                       tape_half_t=tape_t, tol=TIE_TOL[target])
+                kind = "seg"
+            else:
+                quads = (self.sconn[mesh.shell_part != hm.PART_TAPE] if target == hm.TIE_COVERING
+                         else tape)
+                t = np.full(quads.shape[0], 2 * tape_t)
+                if target == hm.TIE_COVERING:
+                    t = mesh.shell_thickness[mesh.shell_part != hm.PART_TAPE]
+                ties, _ = ce.make_ties(self.x, nodes, area, quads=quads, quad_t=t,
+                                       tape_half_t=tape_t, tol=TIE_TOL[target])
+                ties["quads"] = np.ascontiguousarray(quads)
+                kind = "quad"
+            if ties["tie_node"].size:
+                ties["kind"] = kind
+                self.ties.append(ties)
+        self.K_coh = np.array([itf["K_nn"], itf["K_ss"], itf["K_tt"]], dtype=float)
+        self.delta0 = np.full(3, float(itf["delta0"]))
+        if not itf["delta_f"] > itf["delta0"]:
+            raise ValueError(f"cohesive: delta_f = {itf['delta_f']} must exceed delta0 = {itf['delta0']}")
+
+    def tie_step(self) -> float:
+        """Critical step of the stiffest cohesive tie: 2 sqrt(m_red / (K A)), with the reduced
+        mass of the tied node and the mean mass of its target's nodes."""
+        dt = np.inf
+        m = self.mass[:, 0]
+        for ties in self.ties:
+            m1 = m[ties["tie_node"]]
+            if ties["kind"] == "quad":
+                m2 = m[ties["quads"][ties["tie_quad"]]].mean(axis=1)
+            else:
+                m2 = m[self.seg[ties["tie_seg"]]].mean(axis=1)
+            k = np.max(self.K_coh) * ties["tie_area"]
+            dt = min(dt, float(np.min(2.0 * np.sqrt(m1 * m2 / (m1 + m2) / k))))
+        return dt
+
+    def n_ties(self) -> int:
+        return int(sum(t["tie_node"].size for t in self.ties))
+
+    # -- protocol ---------------------------------------------------------------
+    def stable_step(self) -> float:
+        """2 / omega_max with omega_max^2 bounded by the sum of the element, cohesive and
+        contact contributions a node can see at once (two penalty contacts of
+        omega^2 = penalty / dt0^2 each, see :meth:`_penalty`)."""
+        w2 = (2.0 / self.element_step()) ** 2 + (2.0 / self.tie_step()) ** 2
+        w2 += 2.0 * self.inp.explicit["penalty"] / self.dt0**2
+        return 2.0 / np.sqrt(w2)
+
+    def advance(self, du, t):
+        self.x += du[:, :3]
+        rotate_nodes(self.quat[:self.nw], np.ascontiguousarray(du[:self.nw, 3:]))
+        self.c_prev[...] = self.pins.centres
+        self.pins.move_to(t)
+
+    def _search(self):
+        x, m = self.x, SEARCH_MARGIN
+        lo, hi = segment_aabbs(x, self.seg, self.seg_r, m)
+        cell = float(np.median(np.max(hi - lo, axis=1)))
+        self.ww_pairs = box_pairs(lo, hi, lo, hi, cell, True)
+        for fs in self.facet_sets:
+            self._search_set(fs)
+
+    def _search_set(self, fs):
+        lo_n, hi_n = node_aabbs(self.x, fs["nodes"], fs["r"], SEARCH_MARGIN)
+        lo_q, hi_q = quad_aabbs(self.x, fs["quads"], 0.5 * fs["t"], SEARCH_MARGIN)
+        cell = float(np.median(np.max(hi_q - lo_q, axis=1)))
+        fs["pairs"] = box_pairs(lo_n, hi_n, lo_q, hi_q, cell, False)
+
+    def forces(self, t, v, dt):
+        F = self.F
+        F[...] = 0.0
+        if self.calls % self.inp.explicit["search_every"] == 0:
+            self._search()
+        self.calls += 1
+        fi, fn, ft, pn, pt, fc, fd = F
+        s = self._scratch
+        s[...] = 0.0
+        self.wires.add_forces(self.x, self.quat, s)          # s = -f_int of the beams
+        fi += s
+        if self.has_shells:
+            s[...] = 0.0
+            shell_forces(self.x, v, self.sconn, self.sthick, self.smat, self.sstate, dt,
+                         self.s_el, s)
+            fi -= s
+        itf = self.inp.interface
+        k_t_ratio = 1.0
+        active = ce.beam_beam_contact(self.x, v, self.seg, self.seg_r, self.seg_body,
+                                      self.ww_pairs, self.k_ww, k_t_ratio * self.k_ww,
+                                      itf["mu_s"], itf["mu_k"], itf["d_c"], dt, self.time_scale,
+                                      self.ww_hist[0], self.ww_hist[1], fn, ft)
+        for fs in self.facet_sets:
+            mu_s, mu_k, d_c = fs["mu"]
+            active += ce.node_facet_contact(self.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"],
+                                            fs["sign"], fs["pairs"], fs["k"], fs["k"], mu_s, mu_k,
+                                            d_c, dt, self.time_scale, fs["pen_max"],
+                                            fs["hist"][0], fs["hist"][1], fn, ft)
+        p = self.pins
+        p.force[...] = 0.0
+        half = np.full(3, np.inf)
+        for g in self.pin_groups:
+            active += ce.node_cylinder_contact(self.x, v, g["nodes"], g["r"], g["mu"], p.centres,
+                                               p.axes, p.radii, half, p.velocity, g["k"], g["k"],
+                                               dt, g["hist"], pn, pt, p.force)
+        for ties in self.ties:
+            if ties["kind"] == "quad":
+                ce.cohesive_ties_quad(self.x, ties["tie_node"], ties["tie_quad"], ties["tie_xi"],
+                                      ties["tie_sign"], ties["tie_off"], ties["tie_area"],
+                                      ties["quads"], self.K_coh, self.delta0, itf["delta_f"],
+                                      itf["alpha_d"], ties["tie_kappa"], ties["tie_D"],
+                                      ties["tie_energy"], fc)
+            else:
+                ce.cohesive_ties_seg(self.x, ties["tie_node"], ties["tie_seg"], ties["tie_s"],
+                                     ties["tie_n0"], ties["tie_t0"], ties["tie_off"],
+                                     ties["tie_area"], self.seg, self.K_coh, self.delta0,
+                                     itf["delta_f"], itf["alpha_d"], ties["tie_kappa"],
+                                     ties["tie_D"], ties["tie_energy"], fc)
+        if self.c_damp > 0.0:
+            np.multiply(self.mass, v, out=fd)
+            fd *= -self.c_damp
+        self.active = active
+        self.pairs_max = max(self.pairs_max, active)
+        return F
+
+    def external_work(self, t0, t1) -> float:
+        """Work of the pins on the system: F_on_system = -force on the pin."""
+        dc = self.pins.centres - self.c_prev
+        w = -0.5 * float(np.sum((self.f_pin_prev + self.pins.force) * dc))
+        self.f_pin_prev = self.pins.force.copy()
+        return w
+
+    def commit(self):
+        self.wires.commit()
+
+    def displacement_max(self) -> float:
+        return float(np.max(np.abs(self.x - self.mesh.X)))
+
+    def plastic_work(self) -> float:
+        w = self.wires.plastic_work()
+        if self.has_shells:
+            w += float(shell_energies(self.sstate)[2])
+        return w
+
+    def debonded(self) -> int:
+        return int(sum(np.sum(t["tie_D"] >= 1.0) for t in self.ties))
+
+    def observe(self, t) -> dict:
+        p = self.pins
+        return {"deflection_mm": p.feeder_displacement(), "force_N": float(p.force[p.feeder, 1]),
+                "roller_force_N": float(-p.force[:p.feeder, 1].sum()),
+                "plastic": self.plastic_work(), "contacts": self.active,
+                "debonded_ties": self.debonded()}
+
+
+@dataclass
+class HifiRun:
+    """Result of one virtual test."""
+
+    curve: pd.DataFrame          # deflection_mm, force_N (feeder)
+    history: pd.DataFrame        # time, energies by family, W_ext, balance, observations
+    slip_out: pd.DataFrame       # wire, type, left_mm, right_mm (axial slip relative to the covering ends)
+    shapes: dict = field(default_factory=dict)   # deflection (mm) -> node positions (n, 3)
+    summary: dict = field(default_factory=dict)
+    mesh: object = None
+
+
+def _slip_out(system) -> pd.DataFrame:
+    """Axial displacement of each wire end minus that of the covering's end (or of the
+    bundle's mean end for a covering-less TWB): positive = the wire pulled in."""
+    mesh, x = system.mesh, system.x
+    ux = x[:, 0] - mesh.X[:, 0]
+    ends = mesh.wire_nodes[:, [0, -1]]
+    ref = ux[ends].mean(axis=0)
+    cov = np.flatnonzero(mesh.shell_part != hm.PART_TAPE) if system.has_shells else np.array([], int)
+    if cov.size:
+        nodes = np.unique(system.sconn[cov])
+        X = mesh.X[nodes, 0]
+        ref = np.array([ux[nodes[X <= X.min() + 1e-6]].mean(), ux[nodes[X >= X.max() - 1e-6]].mean()])
+    return pd.DataFrame({"wire": np.arange(mesh.n_wires), "type": mesh.wire_type,
+                         "left_mm": ux[ends[:, 0]] - ref[0], "right_mm": -(ux[ends[:, 1]] - ref[1])})
+
+
+def three_point(inp: HifiInputs, n_shapes: int = 4, settings: DynamicsSettings | None = None) -> HifiRun:
+    """Run the virtual three-point test; raises ExplicitError when the run goes unstable or
+    its KE/IE exceeds ``config.explicit.ke_ie_max`` (a quasi-static test that is not)."""
+    t0 = time.perf_counter()
+    mesh = hm.build_mesh(inp.case, inp.config, inp.resolution)
+    system = HifiSystem(mesh, inp)
+    ex = inp.explicit
+    settings = settings or DynamicsSettings(safety=ex["safety"], n_output=200)
+    shapes = {}
+    marks = np.linspace(0.0, 1.0, n_shapes + 1)
+    state = {"next": 0}
+
+    def on_output(step, t):
+        while state["next"] < marks.size and t >= marks[state["next"]] * system.T - 1e-12:
+            shapes[round(float(system.pins.feeder_displacement()), 6)] = system.x.copy()
+            state["next"] += 1
+
+    res = integrate(system, system.T, settings, on_output=on_output)
+    limit = inp.config["explicit"]["ke_ie_max"]
+    from harnesspipe.fe.explicit import ExplicitError
+    if res.ke_ie_max > limit:
+        h = res.history.iloc[-1]
+        raise ExplicitError(f"max KE/IE {res.ke_ie_max:.3g} > {limit:g} after the ramp (not "
+                            "quasi-static: raise t_total)", res.n_steps, system.T, h["KE"],
+                            h["internal"], h["W_ext"], res.dt)
+    hist = res.history
+    curve = hist[["deflection_mm", "force_N"]].copy()
+    summary = {
+        "wall_s": time.perf_counter() - t0, "solver_wall_s": res.wall_s, "steps": res.n_steps,
+        "dt": res.dt, "f_m": ex["f_m"], "t_total": system.T, "time_scale": system.time_scale,
+        "ke_ie_max": res.ke_ie_max, "energy_error": res.energy_error,
+        "n_beam_elements": int(mesh.beam_conn.shape[0]), "n_shell_elements": int(mesh.shell_conn.shape[0]),
+        "n_nodes": int(mesh.n_nodes), "n_ties": system.n_ties(),
+        "contact_pairs_max": int(system.pairs_max), "threads": numba.get_num_threads(),
+        "energies": {k: float(hist[k].iloc[-1]) for k in (*FAMILIES, "KE", "W_ext", "plastic")},
+        "debonded_ties": system.debonded(),
+    }
+    return HifiRun(curve, hist, _slip_out(system), shapes, summary, mesh)

@@ -1,0 +1,106 @@
+"""Parts of the high-fidelity bundle model: the wires (fibre beams) and the rigid pins.
+
+Each part owns its state and history and adds its forces into the families of
+:class:`harnesspipe.models.hifi.HifiSystem` (forces acting ON the nodes).
+"""
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from harnesspipe.fe.beam import initial_frames, lobatto_points
+from harnesspipe.fe.beam_explicit import (beam_forces, beam_lumped_mass, beam_plastic_work,
+                                          beam_stable_step)
+from harnesspipe.fe.explicit import smooth_step
+from harnesspipe.fe.fiber import disc_fibres
+
+
+class Wires:
+    """All wires of a bundle: 2-node co-rotational beams with J2 fibre sections.
+
+    ``types``: one dict per wire type (E, sigma_y, K, n, nu, rho, d_outer), indexed by
+    ``elem_type`` (n_el,); the section is the disc of diameter d_outer (Table 1 gives
+    homogenised bending properties for it).
+    """
+
+    def __init__(self, X0, conn, elem_type, types, n_rings, n_sectors, n_gauss, f_m):
+        self.X0 = np.ascontiguousarray(X0, dtype=float)
+        self.conn = np.ascontiguousarray(conn, dtype=np.int64)
+        self.sec_id = np.ascontiguousarray(elem_type, dtype=np.int64)
+        self.R0 = initial_frames(self.X0, self.conn)
+        self.xi_g, self.w_g = lobatto_points(n_gauss)
+        secs = [disc_fibres(0.5 * t["d_outer"], n_rings, n_sectors) for t in types]
+        self.sec_y, self.sec_z, self.sec_area = (np.ascontiguousarray(np.stack([s[k] for s in secs]))
+                                                 for k in range(3))
+        self.radius = np.array([0.5 * t["d_outer"] for t in types])
+        G = np.array([t["E"] / (2.0 * (1.0 + t["nu"])) for t in types])
+        self.sec_GJ = G * np.pi * self.radius**4 / 2.0
+        self.G = G
+        self.mats = np.array([[t["E"], t["sigma_y"], t["K"], t["n"]] for t in types])
+        self.rho = np.array([f_m * t["rho"] for t in types])
+        n_el, ng, nf = self.conn.shape[0], self.xi_g.size, self.sec_y.shape[1]
+        self.hist = np.zeros((2, n_el, ng, nf))
+        self.trial = np.zeros((2, n_el, ng, nf))
+        self.f_el = np.zeros((n_el, 12))
+        self.nodes = np.unique(self.conn)
+
+    def element_radius(self):
+        return self.radius[self.sec_id]
+
+    def add_mass(self, mass):
+        r = self.element_radius()
+        beam_lumped_mass(self.X0, self.conn, np.pi * r**2, np.pi * r**4 / 4.0,
+                         self.rho[self.sec_id], mass)
+
+    def stable_step(self, x):
+        l = np.linalg.norm(x[self.conn[:, 1]] - x[self.conn[:, 0]], axis=1)
+        r = self.element_radius()
+        k = self.sec_id
+        l0 = np.linalg.norm(self.X0[self.conn[:, 1]] - self.X0[self.conn[:, 0]], axis=1)
+        # mass from the reference length (lumped once), stiffness at the current length
+        dt = beam_stable_step(np.minimum(l, l0), np.pi * r**2, np.pi * r**4 / 4.0,
+                              self.mats[k, 0], self.G[k], self.rho[k])
+        return float(dt.min())
+
+    def add_forces(self, x, quat, f_internal):
+        """Add the element forces (ON the nodes: minus the internal force)."""
+        f = np.zeros_like(f_internal)
+        beam_forces(self.X0, self.conn, self.R0, x, quat, self.xi_g, self.w_g, self.sec_y,
+                    self.sec_z, self.sec_area, self.sec_GJ, self.sec_id, self.mats, self.sec_id,
+                    self.hist[0], self.hist[1], self.trial[0], self.trial[1], self.f_el, f,
+                    numba.get_num_threads())
+        f_internal -= f
+
+    def commit(self):
+        self.hist[...] = self.trial
+
+    def plastic_work(self):
+        return beam_plastic_work(self.conn, self.X0, self.w_g, self.sec_area, self.sec_id,
+                                 self.mats, self.sec_id, self.hist[1])
+
+
+class Pins:
+    """The rigid 5 mm pins of the three-point test: two fixed rollers and the feeder.
+
+    The feeder (index ``feeder``) moves by ``-deflection`` along y with the smooth-step
+    amplitude over the run, ``y(t) = y0 - d S(t/T)``; the rollers stay.
+    """
+
+    def __init__(self, centres, radius, feeder, deflection, total_time):
+        self.c0 = np.asarray(centres, dtype=float).copy()
+        self.centres = self.c0.copy()
+        self.axes = np.tile([0.0, 0.0, 1.0], (self.c0.shape[0], 1))
+        self.radii = np.full(self.c0.shape[0], float(radius))
+        self.velocity = np.zeros_like(self.c0)
+        self.feeder = int(feeder)
+        self.deflection = float(deflection)
+        self.T = float(total_time)
+        self.force = np.zeros_like(self.c0)        # force ON each pin (from the contacts)
+
+    def move_to(self, t):
+        S, dS, _ = smooth_step(t / self.T)
+        self.centres[self.feeder, 1] = self.c0[self.feeder, 1] - self.deflection * S
+        self.velocity[self.feeder, 1] = -self.deflection * dS / self.T
+
+    def feeder_displacement(self):
+        return self.c0[self.feeder, 1] - self.centres[self.feeder, 1]
