@@ -17,6 +17,7 @@ from harnesspipe import __version__
 COMMAND_MODULES = (
     "harnesspipe.commands.data",
     "harnesspipe.commands.rom",
+    "harnesspipe.commands.hifi",
     "harnesspipe.commands.report",
     "harnesspipe.commands.stage",
 )

@@ -1011,6 +1011,9 @@ def _candidates_quad(x, tape_nodes, quads, pairs, out_xi, out_gap, out_X, out_n)
             out_n[p, c] = nq[c]
             d2 += (x[tape_nodes[i], c] - X[c]) ** 2
         out_gap[p] = math.sqrt(d2)
+        nd = tape_nodes[i]
+        if quads[q, 0] == nd or quads[q, 1] == nd or quads[q, 2] == nd or quads[q, 3] == nd:
+            out_gap[p] = np.inf        # never tie a node to a quad of its own
 
 
 @njit(cache=True, parallel=True)
@@ -1095,7 +1098,7 @@ def make_ties(x, tape_nodes, node_area, quads=None, quad_t=None, quad_sign=None,
         gap = np.abs(dist - 0.5 * quad_t[pairs[:, 1]] - tape_half_t)
         ok = gap <= tol
         best = _best_per_node(n, pairs[ok, 0], gap[ok])
-        idx = np.flatnonzero(ok)
+        idx = np.append(np.flatnonzero(ok), -1)      # sentinel: no candidate at all
         q_sel = np.where(best >= 0, idx[np.maximum(best, 0)], -1)
         best_q_gap = np.where(best >= 0, gap[np.maximum(q_sel, 0)], big)
         q_data = (pairs, xi, X, nq)
@@ -1112,7 +1115,7 @@ def make_ties(x, tape_nodes, node_area, quads=None, quad_t=None, quad_sign=None,
         gap_s = np.abs(dist_s - seg_r[pairs_s[:, 1]] - tape_half_t)
         ok = gap_s <= tol
         best = _best_per_node(n, pairs_s[ok, 0], gap_s[ok])
-        idx = np.flatnonzero(ok)
+        idx = np.append(np.flatnonzero(ok), -1)      # sentinel: no candidate at all
         s_sel = np.where(best >= 0, idx[np.maximum(best, 0)], -1)
         best_s_gap = np.where(best >= 0, gap_s[np.maximum(s_sel, 0)], big)
     use_q = np.isfinite(best_q_gap) & (best_q_gap <= best_s_gap)

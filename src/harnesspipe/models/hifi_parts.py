@@ -43,6 +43,7 @@ class Wires:
         self.trial = np.zeros((2, n_el, ng, nf))
         self.f_el = np.zeros((n_el, 12))
         self.nodes = np.unique(self.conn)
+        self._f = np.zeros((int(self.conn.max()) + 1, 6))
 
     def element_radius(self):
         return self.radius[self.sec_id]
@@ -53,26 +54,30 @@ class Wires:
                          self.rho[self.sec_id], mass)
 
     def stable_step(self, x):
+        return float(self.element_steps(x).min())
+
+    def element_steps(self, x):
+        """Critical step of every element (Gershgorin bound, elastic stiffness)."""
         l = np.linalg.norm(x[self.conn[:, 1]] - x[self.conn[:, 0]], axis=1)
         r = self.element_radius()
         k = self.sec_id
         l0 = np.linalg.norm(self.X0[self.conn[:, 1]] - self.X0[self.conn[:, 0]], axis=1)
         # mass from the reference length (lumped once), stiffness at the current length
-        dt = beam_stable_step(np.minimum(l, l0), np.pi * r**2, np.pi * r**4 / 4.0,
-                              self.mats[k, 0], self.G[k], self.rho[k])
-        return float(dt.min())
+        return beam_stable_step(np.minimum(l, l0), np.pi * r**2, np.pi * r**4 / 4.0,
+                                self.mats[k, 0], self.G[k], self.rho[k])
 
     def add_forces(self, x, quat, f_internal):
         """Add the element forces (ON the nodes: minus the internal force)."""
-        f = np.zeros_like(f_internal)
+        f = self._f
+        f[...] = 0.0
         beam_forces(self.X0, self.conn, self.R0, x, quat, self.xi_g, self.w_g, self.sec_y,
                     self.sec_z, self.sec_area, self.sec_GJ, self.sec_id, self.mats, self.sec_id,
                     self.hist[0], self.hist[1], self.trial[0], self.trial[1], self.f_el, f,
                     numba.get_num_threads())
-        f_internal -= f
+        f_internal[:f.shape[0]] -= f
 
     def commit(self):
-        self.hist[...] = self.trial
+        self.hist, self.trial = self.trial, self.hist
 
     def plastic_work(self):
         return beam_plastic_work(self.conn, self.X0, self.w_g, self.sec_area, self.sec_id,

@@ -1,0 +1,136 @@
+"""Hi-fi virtual three-point test of one case: parameters from the config, run, artefacts.
+
+Artefacts (``outdir``): ``energies.csv`` (time, KE, every absorbed-energy family, W_ext,
+balance), ``slip_out.csv`` (axial slip of every wire end relative to the covering end),
+``shapes/`` (VTU per instant + PVD) and ``shapes.png``; ``out_csv``
+(``deflection_mm,force_N`` at the feeder) and ``summary_json`` (DESIGN / issue 5
+fields plus the parameters used).  Everything is written only after the run
+succeeded, each file atomically.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from harnesspipe.config import ConfigError
+
+#: keys of ``--set`` and their place: interface/explicit parameters, resolution, coverings
+INTERFACE_KEYS = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1", "mu_s",
+                  "mu_k", "d_c", "K_nn", "K_ss", "K_tt")
+EXPLICIT_KEYS = ("t_total", "f_m", "safety", "mass_damping", "penalty", "search_every")
+COVERINGS = ("closed_tube", "open_tube", "fabric_tube")
+
+
+def case_definition(cfg: dict, case: str) -> dict:
+    cases = dict(cfg["cases"])
+    cases.update(cfg["hifi"].get("extra_cases", {}))
+    if case not in cases:
+        raise ConfigError(f"--case {case!r}: not a case of the config (one of {sorted(cases)})")
+    return dict(cases[case])
+
+
+def covering_properties(cfg: dict, table2: Path | None) -> dict:
+    """E, sigma_y, K, n per covering: the tensile stage's Table 2 CSV, else the config."""
+    if table2 is None:
+        source = cfg["hifi"]["coverings"]
+        if source != "paper":
+            raise ConfigError(f"hifi.coverings: {source!r}: expected 'paper' or pass --coverings")
+        return {k: dict(v) for k, v in cfg["paper"]["table2"].items()}
+    frame = pd.read_csv(table2)
+    missing = {"component", "E", "sigma_y", "K", "n"} - set(frame.columns)
+    if missing:
+        raise ConfigError(f"{table2}: missing columns {sorted(missing)}")
+    return {row.component: {k: float(getattr(row, k)) for k in ("E", "sigma_y", "K", "n")}
+            for row in frame.itertuples()}
+
+
+def parameters(cfg: dict, overrides: dict, table2: Path | None = None) -> dict:
+    """Everything a run needs, as plain values: interface, explicit, resolution, coverings."""
+    from harnesspipe.config import resolution
+    p = {
+        "interface": {**cfg["interfaces"], **cfg["hifi"]["parameters"]},
+        "explicit": {**cfg["hifi"]["explicit"], "f_m": cfg["explicit"]["f_m"]},
+        "resolution": dict(resolution(cfg)["hifi"]),
+        "coverings": covering_properties(cfg, table2),
+    }
+    for key, text in overrides.items():
+        try:
+            value = float(text)
+        except ValueError:
+            raise ConfigError(f"--set {key}={text}: not a number") from None
+        group, _, name = key.rpartition(".")
+        if group in COVERINGS and name in ("E", "sigma_y", "K", "n"):
+            p["coverings"][group][name] = value
+        elif key in INTERFACE_KEYS:
+            p["interface"][key] = value
+        elif key in EXPLICIT_KEYS:
+            p["explicit"][key] = value
+        elif key in p["resolution"]:
+            p["resolution"][key] = int(value) if float(value).is_integer() else value
+        else:
+            allowed = (list(INTERFACE_KEYS) + list(EXPLICIT_KEYS) + sorted(p["resolution"])
+                       + [f"{c}.E|sigma_y|K|n" for c in COVERINGS])
+            raise ConfigError(f"--set {key}: unknown parameter (one of {', '.join(allowed)})")
+    return p
+
+
+def inputs(cfg: dict, case: str, overrides: dict, table2: Path | None = None):
+    """The :class:`harnesspipe.models.hifi.HifiInputs` of one run from the config."""
+    from harnesspipe.models.hifi import HifiInputs
+    p = parameters(cfg, overrides, table2)
+    res = p["resolution"]
+    explicit = {**p["explicit"], "t_total": float(p["explicit"].get("t_total", res["t_total"]))}
+    return HifiInputs(case_definition(cfg, case), cfg, p["interface"], explicit,
+                      {k: v for k, v in res.items() if k != "t_total"}, p["coverings"])
+
+
+def run_case(cfg: dict, case: str, overrides: dict, *, coverings: Path | None, out_csv: Path,
+             summary_json: Path, outdir: Path) -> dict:
+    """Run one virtual test and write its artefacts; returns the summary."""
+    from harnesspipe.models.hifi import three_point
+    from harnesspipe.stages.common import write_csv, write_json
+    inp = inputs(cfg, case, overrides, coverings)
+    run = three_point(inp)
+    outdir = Path(outdir)
+    write_csv(outdir / "energies.csv", run.history)
+    write_csv(outdir / "slip_out.csv", run.slip_out)
+    write_shapes(outdir, run)
+    summary = {"case": case, "profile": cfg["profile"], **run.summary,
+               "parameters": {"interface": inp.interface, "explicit": inp.explicit,
+                              "resolution": inp.resolution, "coverings": inp.coverings}}
+    write_csv(out_csv, run.curve)
+    write_json(summary_json, summary)
+    return summary
+
+
+def write_shapes(outdir: Path, run) -> None:
+    """Bent shapes: one VTU per instant (meshio) + a PVD series + a side-view PNG."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from harnesspipe.models.hifi_mesh import write_vtu
+    folder = Path(outdir) / "shapes"
+    folder.mkdir(parents=True, exist_ok=True)
+    entries = []
+    for k, (defl, x) in enumerate(sorted(run.shapes.items())):
+        name = f"shape_{k:02d}.vtu"
+        write_vtu(folder / name, run.mesh, x)
+        entries.append(f'    <DataSet timestep="{defl:.6g}" file="{name}"/>')
+    (folder / "shapes.pvd").write_text(
+        '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
+        + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
+    mesh = run.mesh
+    fig, ax = plt.subplots(figsize=(8, 3.2))
+    centre = mesh.wire_nodes[int(((mesh.wire_yz**2).sum(axis=1)).argmin())]
+    for defl, x in sorted(run.shapes.items()):
+        ax.plot(x[centre, 0], x[centre, 1], label=f"{defl:.1f} mm")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_title("centre wire at the feeder deflections")
+    ax.legend(fontsize=7)
+    ax.set_aspect("equal")
+    fig.tight_layout()
+    fig.savefig(Path(outdir) / "shapes.png", dpi=110)
+    plt.close(fig)
