@@ -25,6 +25,8 @@ def register(sub) -> None:
                    metavar="KEY=VALUE", help="override a parameter, e.g. mu_rtb=0.25 (repeatable)")
     p.add_argument("--out", type=Path, required=True, help="CSV: deflection_mm,force_N")
     p.add_argument("--summary", type=Path, required=True, help="summary JSON")
+    p.add_argument("--threads", type=int, default=None,
+                   help="Numba threads (default: all cores; Snakemake passes its `threads`)")
     p.add_argument("--outdir", type=Path, default=None,
                    help="folder for energies, slip-out, shapes (default: beside --out)")
     p.set_defaults(func=_three_point)
@@ -34,6 +36,12 @@ def _three_point(args) -> int:
     from harnesspipe.config import load
     from harnesspipe.stages.hifi import run_case
 
+    if args.threads is not None:
+        import numba
+        from harnesspipe.cli import InputError
+        if not 1 <= args.threads <= numba.config.NUMBA_NUM_THREADS:
+            raise InputError(f"--threads {args.threads}: expected 1..{numba.config.NUMBA_NUM_THREADS}")
+        numba.set_num_threads(args.threads)
     cfg = load(args.config) if args.config else load()
     if args.profile is not None:
         if args.profile not in cfg["profiles"]:

@@ -1,0 +1,155 @@
+"""Hi-fi virtual three-point test (Sec. 4.1): explicit core on a pinned wire, a full CWB
+run (energy balance, no energy created by any interaction, quasi-static end state,
+artefacts) and the CLI's error handling."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from harnesspipe.config import load
+from harnesspipe.fe.dynamics import DynamicsSettings, integrate
+from harnesspipe.fe.rotation import rotate_nodes
+from harnesspipe.models.hifi_parts import Wires
+
+
+class PinnedWire:
+    """One elastic wire, pinned at both ends, mid-span load P with a smooth step, mass damping:
+    the dynamics protocol in its smallest form."""
+
+    families = ("internal", "load", "damping")
+
+    def __init__(self, L=100.0, n_el=20, r=0.7, E=4528.0, P=0.05, T=0.2, c=150.0):
+        x = np.linspace(0.0, L, n_el + 1)
+        self.X = np.c_[x, np.zeros_like(x), np.zeros_like(x)]
+        conn = np.c_[np.arange(n_el), np.arange(1, n_el + 1)]
+        wire = dict(d_outer=2 * r, E=E, nu=0.39, sigma_y=1e9, K=0.0, n=1.0, rho=4.34e-9)
+        self.w = Wires(self.X, conn, np.zeros(n_el, dtype=int), [wire], 2, 8, 3, 25.0)
+        n = self.X.shape[0]
+        self.x = self.X.copy()
+        self.quat = np.zeros((n, 4))
+        self.quat[:, 0] = 1.0
+        self.mass = np.zeros((n, 6))
+        self.w.add_mass(self.mass)
+        self.free = np.ones((n, 6), dtype=bool)
+        self.free[0, :3] = False
+        self.free[-1, 1:3] = False
+        self.free[:, 3:5] = False               # planar bending about z
+        self.mid, self.P, self.T, self.c = n_el // 2, P, T, c
+        self.F = np.zeros((3, n, 6))
+        self.EI = E * np.pi * r**4 / 4.0
+        self.L = L
+
+    def stable_step(self):
+        return self.w.stable_step(self.x)
+
+    def forces(self, t, v, dt):
+        from harnesspipe.fe.explicit import smooth_step
+        self.F[...] = 0.0
+        self.w.add_forces(self.x, self.quat, self.F[0])
+        self.F[1, self.mid, 1] = -self.P * smooth_step(min(t / (0.5 * self.T), 1.0))[0]
+        self.F[2] = -self.c * self.mass * v
+        return self.F
+
+    def advance(self, du, t):
+        self.x += du[:, :3]
+        rotate_nodes(self.quat, np.ascontiguousarray(du[:, 3:]))
+
+    def external_work(self, t0, t1):
+        return 0.0                              # the load is a family: its work is W[load]
+
+    def commit(self):
+        self.w.commit()
+
+    def displacement_max(self):
+        return float(np.abs(self.x - self.X).max())
+
+    def observe(self, t):
+        return {"deflection": -(self.x[self.mid, 1] - self.X[self.mid, 1])}
+
+
+def test_explicit_pinned_wire_matches_static_beam_theory_and_balances_energy():
+    s = PinnedWire()
+    res = integrate(s, s.T, DynamicsSettings(safety=0.8, n_output=50))
+    h = res.history
+    u = h["deflection"].iloc[-1]
+    assert u == pytest.approx(s.P * s.L**3 / (48.0 * s.EI), rel=0.02)
+    # the load's work goes into strain energy and damping; the balance is closed
+    W_load = -h["load"].iloc[-1]
+    assert h["internal"].iloc[-1] + h["damping"].iloc[-1] + h["KE"].iloc[-1] == pytest.approx(W_load, rel=1e-3)
+    assert h["internal"].iloc[-1] == pytest.approx(0.5 * s.P * u, rel=0.02)   # Clapeyron
+    assert res.energy_error < 1e-3
+
+
+SUMMARY_KEYS = {"wall_s", "steps", "dt", "f_m", "ke_ie_max", "energy_error", "n_beam_elements",
+                "n_shell_elements", "contact_pairs_max"}
+
+
+@pytest.fixture(scope="module")
+def cwb_run(tmp_path_factory):
+    """One full coarse-taped open-tube CWB (wires, tube with cut, helix and end tapes, ties,
+    pins), quick mesh, shortened to 0.3 s: an energy test, not a quasi-static one."""
+    from harnesspipe.stages.hifi import run_case
+    cfg = load()
+    cfg["profile"] = "quick"
+    cfg["explicit"]["ke_ie_max"] = 100.0
+    out = tmp_path_factory.mktemp("hifi")
+    summary = run_case(cfg, "cwb19_t2_open_coarse", {"t_total": "0.3"}, coverings=None,
+                       out_csv=out / "curve.csv", summary_json=out / "summary.json",
+                       outdir=out / "files")
+    return out, summary
+
+
+def test_full_cwb_run_closes_the_energy_balance_and_creates_no_energy(cwb_run):
+    import pandas as pd
+    out, summary = cwb_run
+    h = pd.read_csv(out / "files" / "energies.csv")
+    W = h["W_ext"].to_numpy()
+    assert W[-1] > 10.0                                   # N mm: the feeder did real work
+    assert np.max(np.abs(h["balance_error"]) / np.maximum(W, 1e-3 * W[-1])) < 0.01
+    for family in ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive"):
+        assert h[family].min() > -0.01 * W[-1], family     # no interaction is an energy source
+    assert 0.0 < h["plastic"].iloc[-1] < h["internal"].iloc[-1]   # the wires yield (Table 1)
+    curve = pd.read_csv(out / "curve.csv")
+    assert list(curve.columns) == ["deflection_mm", "force_N"]
+    assert curve["deflection_mm"].iloc[-1] == pytest.approx(30.0)
+    assert SUMMARY_KEYS <= set(json.loads((out / "summary.json").read_text()))
+    assert summary["n_shell_elements"] > 0 and summary["contact_pairs_max"] > 0
+
+
+def test_full_cwb_run_writes_shapes_and_slip_out(cwb_run):
+    import pandas as pd
+    import meshio
+    out, _ = cwb_run
+    files = out / "files"
+    vtus = sorted((files / "shapes").glob("*.vtu"))
+    assert len(vtus) >= 3 and (files / "shapes" / "shapes.pvd").exists()
+    assert (files / "shapes.png").stat().st_size > 1000
+    m = meshio.read(vtus[-1])
+    assert m.points[:, 1].min() < -25.0                    # bent: the mid-span went down ~30 mm
+    slip = pd.read_csv(files / "slip_out.csv")
+    assert len(slip) == 19 and np.all(np.isfinite(slip[["left_mm", "right_mm"]]))
+
+
+def _cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "harnesspipe", "hifi", "three-point", *args],
+                          capture_output=True, text=True, cwd=cwd)
+
+
+def test_cli_rejects_unknown_case_and_parameter(tmp_path):
+    r = _cli("--case", "cwb99", "--out", str(tmp_path / "a.csv"), "--summary", str(tmp_path / "a.json"))
+    assert r.returncode == 2 and "cwb99" in r.stderr and "cwb19_t2_closed" in r.stderr
+    r = _cli("--case", "cwb19_t2_closed", "--set", "mu_rbt=0.3", "--out", str(tmp_path / "a.csv"),
+             "--summary", str(tmp_path / "a.json"))
+    assert r.returncode == 2 and "mu_rbt" in r.stderr and "mu_rtb" in r.stderr
+    assert not (tmp_path / "a.csv").exists()
+
+
+def test_unstable_run_fails_with_diagnostics_and_writes_nothing(tmp_path):
+    r = _cli("--case", "cwb19_t2_closed", "--profile", "quick", "--set", "safety=4.0",
+             "--set", "t_total=0.05", "--out", str(tmp_path / "a.csv"),
+             "--summary", str(tmp_path / "a.json"))
+    assert r.returncode == 3, r.stderr
+    assert "step" in r.stderr and "energy" in r.stderr
+    assert not any(tmp_path.iterdir())
