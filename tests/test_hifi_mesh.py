@@ -50,7 +50,7 @@ def test_every_case_builds_with_consistent_counts(config, meshes):
         ns = m.shell_conn.shape[0]
         for arr, shape in ((m.shell_part, (ns,)), (m.shell_thickness, (ns,)), (m.shell_axis, (ns, 3))):
             assert arr.shape == shape
-        assert m.beam_conn.shape[0] <= 700 and ns <= 510          # quick budget
+        assert m.beam_conn.shape[0] <= 700 and ns <= 512          # quick budget (half-lap 288 + 4 x 56)
         assert np.all(element_sizes(m)["shell_area"] > 0.0)
 
 
@@ -172,6 +172,50 @@ def test_halflap_covers_the_tube_twice(meshes):
     assert r[m.tie_target == TIE_TAPE].min() >= 7.125 - 1e-12       # first-turn ramp >= half way
     helix_nodes = np.unique(m.shell_conn[helix])
     assert _radius(m.X[helix_nodes]).max() == pytest.approx(7.2)
+
+
+@pytest.mark.parametrize("name", ["cwb19_t2_open_halflap", "cwb19_t2_open_coarse"])
+def test_every_tie_candidate_finds_its_target(meshes, name):
+    """make_ties finds a target for every tie node: the wrap underneath (tape on tape), the
+    covering, the wires."""
+    from harnesspipe.fe.contact_explicit import make_ties
+    m = meshes[name]
+    tape_el = m.shell_part == PART_TAPE
+    tape, cov = m.shell_conn[tape_el], m.shell_conn[~tape_el]
+    targets = {TIE_TAPE: dict(quads=tape, quad_t=np.full(len(tape), 0.1), tol=0.15),
+               TIE_COVERING: dict(quads=cov, quad_t=m.shell_thickness[~tape_el], tol=0.3),
+               TIE_WIRES: dict(seg=m.beam_conn, seg_r=m.wire_radius[m.beam_wire], tol=0.5)}
+    assert np.any(m.tie_target == TIE_TAPE) == name.endswith("halflap")
+    for code, kw in targets.items():
+        sel = m.tie_target == code
+        if not sel.any():
+            continue
+        nodes = m.tie_nodes[sel]
+        ties_q, ties_s = make_ties(m.X, nodes, m.tie_area[sel], tape_half_t=0.05, **kw)
+        ties = ties_q if "quads" in kw else ties_s
+        assert np.array_equal(np.sort(ties["tie_node"]), np.sort(nodes)), (name, code)
+        if code == TIE_TAPE:     # another wrap's quad, t (t/2 at the step) below the node
+            assert not np.any(tape[ties["tie_quad"]] == ties["tie_node"][:, None])
+            d = np.linalg.norm(ties["tie_off"], axis=1)
+            assert d.max() <= 0.1 + 1e-9 and d.min() >= 0.03, name
+
+
+def test_halflap_back_half_over_previous_wrap(config):
+    """Every TIE_TAPE node has a node of another wrap at the same (x, phi), t_tape (0.1)
+    radially below it (t/2 at the stepped centre line and back edge), at both resolutions."""
+    for res in (RES, "default"):
+        m = build_mesh(config["cases"]["cwb19_t2_open_halflap"], config, res)
+        top = m.X[m.tie_nodes[m.tie_target == TIE_TAPE]]
+        below = m.X[np.unique(m.shell_conn[m.shell_group == GROUP_HELIX])]
+        same = (np.abs(top[:, None, 0] - below[None, :, 0]) < 1e-9) & \
+            (np.abs(np.angle(np.exp(1j * (_phi(top)[:, None] - _phi(below)[None, :])))) < 1e-9)
+        dr = np.where(same, _radius(top)[:, None] - _radius(below)[None, :], np.inf)
+        dr = np.where(dr > 1e-9, dr, np.inf).min(axis=1)      # the node itself excluded
+        # (between t/2 and t over the first turn's centre line, still ramping up)
+        assert np.all((dr >= 0.05 - 1e-9) & (dr <= 0.1 + 1e-9)), res
+        assert np.sum(np.isclose(dr, 0.1)) >= 0.3 * dr.size
+        assert m.info["helix"]["elements_per_turn"] >= 5
+        assert np.all(element_sizes(m)["shell_char_length"] > 0.5)
 
 
 def test_fabric_spiral(meshes):

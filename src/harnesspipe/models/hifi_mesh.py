@@ -55,7 +55,16 @@ Choices where the paper is silent (each documented where it is made)
   strip, each wrap lying half on the tube and half on the previous wrap).  Mesh: across the
   width the front half (towards +x, the winding direction) is at r (on the tube), the back
   half at r + t_tape (on the previous wrap), the centre node at r + t/2; during the first
-  turn the back half ramps from r to r + t (nothing underneath yet).  Every point of the
+  turn the back half ramps from r to r + t (nothing underneath yet: tied to the covering;
+  from the second turn on it is tied to the previous wrap, TIE_TAPE).  Stations along the
+  strip are ``u = x_end - j p/k`` (k elements per turn, ``info["helix"]["elements_per_turn"]``),
+  so every station of wrap n is a station of wrap n-1 shifted by one pitch: each back-half
+  node lies radially above a node of the wrap underneath, t (t/2 at the centre line and at
+  the back edge, over the step) below it.  With unaligned stations the flat chords of the
+  wrap underneath (76 deg of phi each at the quick resolution) sag up to r (1 - cos(dphi/2))
+  ~ 1.5 mm below the node and no tie is found.  The remainder (taped length not a multiple
+  of p/k) is one shorter first element, in the first turn, or, if under half a station, the
+  strip starts that much later.  Every point of the
   taped length away from the strip ends is covered by exactly two tape layers, the helical
   edges (where debonding starts) exist, and nothing builds up beyond two layers.  Rejected:
   a helix of pitch w/2 whose radius grows t per turn (builds 11 layers), and two
@@ -103,10 +112,10 @@ WIRE_CLEARANCE = 1.0e-3            # relative packing clearance (fraction of d)
 TAPINGS = ("none", "coarse", "halflap", "ends")
 
 PRESETS = {
-    # beams 19 x 32 = 608; shells 288 (closed) .. 500 (half-lap)
+    # beams 19 x 32 = 608; shells 288 (closed) .. 512 (half-lap, 5 elements per turn)
     "quick": {"wire_elements": 32, "tube_circ": 12, "tube_axial": 16, "tape_width": 4,
               "end_axial": 6, "end_circ": 8},
-    # beams 19 x 52 = 988; shells 672 (closed) .. 1072 (half-lap)
+    # beams 19 x 52 = 988; shells 672 (closed) .. 1076 (half-lap, 9 elements per turn)
     "default": {"wire_elements": 52, "tube_circ": 16, "tube_axial": 30, "tape_width": 4,
                 "end_axial": 8, "end_circ": 12},
 }
@@ -424,14 +433,32 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
         xc0, xc1 = xa + 0.5 * w_tape, xb - 0.5 * w_tape
         n_w_ = int(res.get("tape_width", 4))
         r_mean = float(np.mean(cov.tape_radius(np.linspace(0, 2 * np.pi, 64))))
-        strip_len = (xc1 - xc0) * np.hypot(1.0, 2.0 * np.pi * r_mean / p)
-        if "tape_axial" in res:
-            n_u = int(res["tape_axial"])
+        stretch = np.hypot(1.0, 2.0 * np.pi * r_mean / p)               # strip length per unit u
+        h = float(res.get("tape_size", l_tube / n_ax))
+        if taping == "halflap":
+            # stations at u = xc1 - j p/k: wrap n's stations are wrap n-1's shifted by one pitch,
+            # so each back-half node lies radially above a node of the wrap underneath (flat
+            # chords of unaligned wraps sag up to r (1 - cos(dphi/2)) = 1.5 mm below it)
+            turns = (xc1 - xc0) / p
+            k = int(round(int(res["tape_axial"]) / turns)) if "tape_axial" in res else \
+                int(round(p * stretch / h))
+            k = max(3, k)
+            du = p / k
+            n_full = int(np.floor((xc1 - xc0) / du + 1e-9))
+            u = xc1 - du * np.arange(n_full, -1, -1, dtype=float)
+            if u[0] - xc0 >= 0.5 * du:               # remainder element at the start (first turn)
+                u = np.concatenate([[xc0], u])
+            else:                                    # tiny remainder: start the strip there
+                xc0 = u[0]
+            n_u = u.size - 1
+            helix_k = k
         else:
-            h = float(res.get("tape_size", l_tube / n_ax))
-            n_u = max(4, int(round(strip_len / h)))
+            n_u = int(res["tape_axial"]) if "tape_axial" in res else \
+                max(4, int(round((xc1 - xc0) * stretch / h)))
+            u = np.linspace(xc0, xc1, n_u + 1)
+            helix_k = None
+        strip_len = (xc1 - xc0) * stretch
         eta = np.linspace(-0.5 * w_tape, 0.5 * w_tape, n_w_ + 1)
-        u = np.linspace(xc0, xc1, n_u + 1)
         phi_h = 2.0 * np.pi * (u - xc0) / p
         base_r = cov.tape_radius(phi_h)[None, :] * np.ones((eta.size, 1))
         on = TIE_WIRES if cov.kind == "none" else TIE_COVERING
@@ -440,7 +467,8 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
             ramp = np.minimum(1.0, (u - xc0) / p)[None, :]
             lift = np.where(eta[:, None] < -1e-9, 1.0, np.where(eta[:, None] > 1e-9, 0.0, 0.5))
             base_r = base_r + t_tape * lift * ramp
-            tgt = np.where((eta[:, None] <= 1e-9) & (ramp >= 0.5 - 1e-12), TIE_TAPE, on)
+            # tape underneath only from the second turn on (the first turn lies on the covering)
+            tgt = np.where((eta[:, None] <= 1e-9) & (u[None, :] >= xc0 + p - 1e-9 * p), TIE_TAPE, on)
         P = _cyl(u[None, :] + eta[:, None], base_r, phi_h[None, :] * np.ones((eta.size, 1)))
         pts, conn, ids = _grid(P, periodic=False)
         # material axis: tangent of the helix centreline at the element's centreline station
@@ -453,7 +481,8 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
         ax = np.tile(tang, (n_w_, 1))                    # element order: i (eta) major, j (u) minor
         base = add(pts, conn, PART_TAPE, GROUP_HELIX, t_tape, ax)
         tie_local.append((ids.ravel() + base, tgt.ravel()))
-        helix = {"pitch": p, "x_range": (xa, xb), "turns": (xc1 - xc0) / p, "strip_length": strip_len}
+        helix = {"pitch": p, "x_range": (xa, xb), "turns": (xc1 - xc0) / p, "strip_length": strip_len,
+                 "strip_x": (xc0 - 0.5 * w_tape, xc1 + 0.5 * w_tape), "elements_per_turn": helix_k}
 
     X = np.concatenate(X_parts)
     shell_conn = np.concatenate(conns)
