@@ -22,14 +22,11 @@ damping, zero unless set) and the work ``W_ext`` of the moving feeder.
 """
 from __future__ import annotations
 
-import numpy as np
-
-FAMILIES = ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive", "damping")
-
 import time
 from dataclasses import dataclass, field
 
 import numba
+import numpy as np
 import pandas as pd
 
 from harnesspipe.fe import contact_explicit as ce
@@ -37,12 +34,13 @@ from harnesspipe.fe.dynamics import DynamicsSettings, integrate
 from harnesspipe.fe.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import rotate_nodes
 from harnesspipe.fe.shell_bt import (init_shell_state, shell_energies, shell_forces,
-                                     shell_lumped_mass, shell_stable_step)
+                                     shell_lumped_mass)
 from harnesspipe.fe.spatial_hash import box_pairs, node_aabbs, quad_aabbs, segment_aabbs
 from harnesspipe.models import hifi_mesh as hm
 from harnesspipe.models.hifi_parts import Pins, Wires
 from harnesspipe.models.tube_equivalent import from_config as tube_equivalent
 
+FAMILIES = ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive", "damping")
 SEARCH_MARGIN = 0.5      # mm added to every contact bounding box between searches
 MAX_LIGHT_SCALE = 4.0    # cap of the selective shell mass scaling (density factor and nodal factor)
 TIE_TOL = {hm.TIE_COVERING: 0.3, hm.TIE_WIRES: 0.5, hm.TIE_TAPE: 0.3}   # mm: facet chord sag / hexagonal bundle under a round band
@@ -101,7 +99,7 @@ class HifiSystem:
 
     def __init__(self, mesh, inp: HifiInputs):
         self.mesh, self.inp = mesh, inp
-        ex, itf = inp.explicit, inp.interface
+        ex = inp.explicit
         self.T = float(ex["t_total"])
         self.time_scale = float(ex["t_phys"]) / self.T
         n = mesh.n_nodes
@@ -137,6 +135,8 @@ class HifiSystem:
         self.dt0 = 2.0 / np.sqrt(self.node_omega2().max())
         self._setup_contacts()
         self.calls = 0
+        self._unbounded = np.full(3, np.inf)         # pins are infinitely long cylinders
+        self.phase = {k: 0.0 for k in ("elements", "contact search", "contact forces", "cohesive")}
         self.pairs_max = 0
         self.active = 0
         self.f_pin_prev = np.zeros(3)
@@ -185,12 +185,6 @@ class HifiSystem:
         self.mass[need] *= scale[:, None]
         self.added_mass_fraction = float(self.mass[:, 0].sum() / base - 1.0)
         return factor
-
-    def element_step(self) -> float:
-        dt = self.wires.stable_step(self.x)
-        if self.has_shells:
-            dt = min(dt, shell_stable_step(self.x, self.sconn, self.sthick, self.smat, self.srho))
-        return dt
 
     def _penalty(self, masses) -> float:
         """k = penalty m / dt^2: omega dt = sqrt(penalty) per contact, explicit-stable."""
@@ -391,12 +385,32 @@ class HifiSystem:
         fs["pairs"] = box_pairs(lo_n, hi_n, lo_q, hi_q, cell, False)
 
     def forces(self, t, v, dt):
+        """All force families at the current configuration; phase wall times in ``phase``."""
+        clock = time.perf_counter
         F = self.F
         F[...] = 0.0
+        t0 = clock()
         if self.calls % self.inp.explicit["search_every"] == 0:
             self._search()
         self.calls += 1
-        fi, fn, ft, pn, pt, fc, fd = F
+        t1 = clock()
+        self._element_forces(v, dt, F[0])
+        t2 = clock()
+        active = self._contact_forces(v, dt, F)
+        t3 = clock()
+        self._cohesive_forces(F[5])
+        if self.c_damp > 0.0:
+            np.multiply(self.mass, v, out=F[6])
+            F[6] *= -self.c_damp
+        t4 = clock()
+        for name, a, b in (("contact search", t0, t1), ("elements", t1, t2),
+                           ("contact forces", t2, t3), ("cohesive", t3, t4)):
+            self.phase[name] += b - a
+        self.active = active
+        self.pairs_max = max(self.pairs_max, active)
+        return F
+
+    def _element_forces(self, v, dt, fi):
         s = self._scratch
         s[...] = 0.0
         self.wires.add_forces(self.x, self.quat, s)          # s = -f_int of the beams
@@ -406,11 +420,13 @@ class HifiSystem:
             shell_forces(self.x, v, self.sconn, self.sthick, self.smat, self.sstate, dt,
                          self.s_el, s)
             fi -= s
+
+    def _contact_forces(self, v, dt, F) -> int:
         itf = self.inp.interface
-        k_t_ratio = 1.0
+        fn, ft, pn, pt = F[1], F[2], F[3], F[4]
         active = ce.beam_beam_contact(self.x, v, self.seg, self.seg_r, self.seg_body,
-                                      self.ww_pairs, self.k_ww, k_t_ratio * self.k_ww,
-                                      itf["mu_s"], itf["mu_k"], itf["d_c"], dt, self.time_scale,
+                                      self.ww_pairs, self.k_ww, self.k_ww, itf["mu_s"],
+                                      itf["mu_k"], itf["d_c"], dt, self.time_scale,
                                       self.ww_hist[0], self.ww_hist[1], fn, ft)
         for fs in self.facet_sets:
             mu_s, mu_k, d_c = fs["mu"]
@@ -420,11 +436,14 @@ class HifiSystem:
                                             fs["hist"][0], fs["hist"][1], fn, ft)
         p = self.pins
         p.force[...] = 0.0
-        half = np.full(3, np.inf)
         for g in self.pin_groups:
             active += ce.node_cylinder_contact(self.x, v, g["nodes"], g["r"], g["mu"], p.centres,
-                                               p.axes, p.radii, half, p.velocity, g["k"], g["k"],
-                                               dt, g["hist"], pn, pt, p.force)
+                                               p.axes, p.radii, self._unbounded, p.velocity,
+                                               g["k"], g["k"], dt, g["hist"], pn, pt, p.force)
+        return active
+
+    def _cohesive_forces(self, fc):
+        itf = self.inp.interface
         for ties in self.ties:
             if ties["kind"] == "quad":
                 ce.cohesive_ties_quad(self.x, ties["tie_node"], ties["tie_quad"], ties["tie_xi"],
@@ -438,12 +457,6 @@ class HifiSystem:
                                      ties["tie_area"], self.seg, self.K_coh, self.delta0,
                                      itf["delta_f"], itf["alpha_d"], ties["tie_kappa"],
                                      ties["tie_D"], ties["tie_energy"], fc)
-        if self.c_damp > 0.0:
-            np.multiply(self.mass, v, out=fd)
-            fd *= -self.c_damp
-        self.active = active
-        self.pairs_max = max(self.pairs_max, active)
-        return F
 
     def external_work(self, t0, t1) -> float:
         """Work of the pins on the system: F_on_system = -force on the pin."""
@@ -562,6 +575,7 @@ def three_point(inp: HifiInputs, n_shapes: int = 4, settings: DynamicsSettings |
         "contact_pairs_max": int(system.pairs_max), "threads": numba.get_num_threads(),
         "energies": {k: float(hist[k].iloc[-1]) for k in (*FAMILIES, "KE", "W_ext", "plastic")},
         "debonded_ties": system.debonded(),
+        "phase_s": {**system.phase, "integrator and bookkeeping": res.wall_s - sum(system.phase.values())},
         "shell_mass_scale": system.shell_mass_scale,
         "added_mass_fraction": system.added_mass_fraction,
     }

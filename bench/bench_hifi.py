@@ -1,0 +1,115 @@
+"""Benchmark of the hi-fi virtual three-point test (``.venv/bin/python bench/bench_hifi.py``).
+
+Measures, for the 19-wire closed-tube CWB (``cwb19_t2_closed``): the median wall time of
+repeated runs per profile (after one untimed warm-up run in the same process, so JIT
+compilation is excluded), the explicit step count and step, KE/IE and energy error, and
+the per-phase cost breakdown of the run (elements, contact search, contact forces,
+cohesive ties, integrator and bookkeeping) from the run's own timers; the first run in
+fresh processes with an empty and with a filled Numba cache (JIT cost, reported apart).
+``--convergence`` adds the mesh study (the default profile against a finer mesh) and the
+mass-scaling study (f_m = 25 against f_m = 10 at the same simulated time): the largest
+force difference over the curve relative to the peak force.  Writes the section
+"## Hi-fi three-point" of bench/RESULTS.md (replacing that section only).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import statistics
+from pathlib import Path
+
+import numpy as np
+
+from benchlib import jit_seconds, write_section
+
+HEADING = "## Hi-fi three-point"
+CASE = "cwb19_t2_closed"
+FINER = {"wire_elements": "60", "tube_circ": "20", "tube_axial": "48"}
+FIRST_RUN = (f"import sys, time; sys.path.insert(0, {str(Path(__file__).resolve().parent)!r}); "
+             "t = time.perf_counter(); import bench_hifi; bench_hifi.warm_up(); "
+             "print(time.perf_counter() - t)")
+
+
+def warm_up() -> None:
+    """Build the quick model and integrate its first 2 ms: every kernel compiled or loaded."""
+    from harnesspipe.config import load
+    from harnesspipe.fe.dynamics import integrate
+    from harnesspipe.models import hifi, hifi_mesh
+    from harnesspipe.stages.hifi import inputs
+    cfg = load()
+    cfg["profile"] = "quick"
+    inp = inputs(cfg, CASE, {})
+    system = hifi.HifiSystem(hifi_mesh.build_mesh(inp.case, cfg, inp.resolution), inp)
+    integrate(system, 0.002)
+
+
+def run(profile: str, overrides: dict | None = None):
+    from harnesspipe.config import load
+    from harnesspipe.models.hifi import three_point
+    from harnesspipe.stages.hifi import inputs
+    cfg = load()
+    cfg["profile"] = profile
+    cfg["explicit"]["ke_ie_max"] = 100.0     # measured and reported, not enforced here
+    return three_point(inputs(cfg, CASE, overrides or {}))
+
+
+def timed(profile: str, repeat: int):
+    runs = [run(profile) for _ in range(repeat)]
+    walls = [r.summary["wall_s"] for r in runs]
+    return runs[len(runs) // 2], statistics.median(walls), walls
+
+
+def curve_difference(a, b) -> float:
+    """max |F_a - F_b| over the common deflection grid / max F_b."""
+    u = np.linspace(0.0, 30.0, 61)
+    fa = np.interp(u, a.curve["deflection_mm"], a.curve["force_N"])
+    fb = np.interp(u, b.curve["deflection_mm"], b.curve["force_N"])
+    return float(np.max(np.abs(fa - fb)) / np.max(np.abs(fb)))
+
+
+def row(profile: str, r, median: float, walls) -> str:
+    s = r.summary
+    phases = ", ".join(f"{k} {v:.1f} s" for k, v in s["phase_s"].items())
+    return (f"| {profile} | {s['n_beam_elements']} / {s['n_shell_elements']} | {s['steps']} | "
+            f"{s['dt']:.3g} | {median:.1f} ({', '.join(f'{w:.1f}' for w in walls)}) | "
+            f"{s['ke_ie_max']:.3g} | {s['energy_error']:.2g} | {phases} |")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=3, help="timed runs per profile")
+    parser.add_argument("--profiles", nargs="+", default=["quick", "default"])
+    parser.add_argument("--convergence", action="store_true")
+    args = parser.parse_args()
+    import numba
+    warm_up()                                          # JIT, not timed
+    lines = [HEADING, "",
+             f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+             f"Numba threads {numba.get_num_threads()}; case `{CASE}`; wall = median of "
+             f"{args.repeat} runs after a warm-up run (JIT excluded); phases from the run's timers.",
+             "", "| profile | beams / shells | steps | dt [s] | wall [s] (runs) | KE/IE max | "
+             "energy error | phases |", "|---|---|---|---|---|---|---|---|"]
+    results = {}
+    for profile in args.profiles:
+        r, med, walls = timed(profile, args.repeat if profile == "quick" else 1)
+        results[profile] = r
+        lines.append(row(profile, r, med, walls))
+    cold, cached = jit_seconds(FIRST_RUN)
+    lines += ["", f"First run in a fresh process (one thread, 0.01 s of simulated time): "
+                  f"{cold[0]:.1f} s with an empty Numba cache, {cached[0]:.1f} s from the cache."]
+    if args.convergence:
+        base = results.get("default") or run("default")
+        fine = run("default", FINER)
+        light = run("default", {"f_m": "10"})
+        lines += ["", "Convergence of the force curve (max |dF| over 0-30 mm / peak force):",
+                  f"- mesh: default vs finer ({', '.join(f'{k} {v}' for k, v in FINER.items())}; "
+                  f"{fine.summary['wall_s']:.0f} s): {curve_difference(base, fine):.1%}",
+                  f"- mass scaling: f_m 25 vs 10 at the same t_total ({light.summary['wall_s']:.0f} s): "
+                  f"{curve_difference(base, light):.1%}"]
+    write_section(HEADING, "\n".join(lines))
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
