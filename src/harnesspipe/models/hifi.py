@@ -233,16 +233,36 @@ class HifiSystem:
                 inner = np.flatnonzero(np.all(np.isin(self.sconn, mesh.fabric_overlap_inner), axis=1))
                 r = np.full(mesh.fabric_overlap_outer.size, 0.2)   # < half the 0.48 layer gap
                 self._facet_set(mesh.fabric_overlap_outer.astype(np.int64), r, inner, 1.0)
+            if mesh.cut_pairs.size:
+                self._cut_contact()
 
-    def _facet_set(self, nodes, r, quads, sign):
+    def _cut_contact(self):
+        """Self-contact across the open tube's cut: the edges may open freely; when they close
+        they cannot pass through each other but ride one over the other, edge a (phi = 0)
+        outside the mid-surface of edge b (phi = 2 pi) and edge b inside that of a.  The
+        seam nodes start coincident, so the contact acts on the mid-surfaces (zero radius
+        and thickness) and reaches half the wall's contact thickness deep."""
+        mesh = self.mesh
+        tube = mesh.shell_part == hm.PART_TUBE
+        half = 0.5 * float(np.max(mesh.shell_thickness[tube]))
+        for own, other, sign in ((0, 1, 1.0), (1, 0, -1.0)):
+            nodes = mesh.cut_pairs[:, own].astype(np.int64)
+            quads = np.flatnonzero(tube & np.any(np.isin(self.sconn, mesh.cut_pairs[:, other]), axis=1))
+            self._facet_set(nodes, np.zeros(nodes.size), quads, sign, t=0.0, pen_max=half)
+
+    def _facet_set(self, nodes, r, quads, sign, t=None, pen_max=None):
         itf = self.inp.interface
         q = np.ascontiguousarray(self.sconn[quads])
         qn = np.unique(q)
         k = self._penalty(np.r_[self.mass[nodes, 0], self.mass[qn, 0]])
-        t = np.ascontiguousarray(self.mesh.shell_thickness[quads], dtype=float)
+        if t is None:
+            t = self.mesh.shell_thickness[quads]
+        t = np.ascontiguousarray(np.broadcast_to(t, (q.shape[0],)), dtype=float)
+        if pen_max is None:
+            pen_max = float(np.max(r) + 0.5 * np.max(t))
         fs = dict(nodes=np.ascontiguousarray(nodes, dtype=np.int64),
                   r=np.ascontiguousarray(r, float).copy(), quads=q, t=t,
-                  sign=np.full(q.shape[0], sign), k=k, pen_max=float(np.max(r) + 0.5 * np.max(t)),
+                  sign=np.full(q.shape[0], sign), k=k, pen_max=pen_max,
                   hist=ce.new_slot_history(nodes.size), pairs=np.zeros((0, 2), dtype=np.int64),
                   mu=(itf["mu_s"], itf["mu_k"], itf["d_c"]))
         self._adjust_initial_gaps(fs)
