@@ -356,7 +356,8 @@ class HifiSystem:
                 np.maximum.at(w2, self.sconn[:, a], ws)
         m = self.mass[:, 0]
         for ties in self.ties:
-            k = np.max(self.K_coh) * ties["tie_area"]
+            # Gershgorin row of a spring k between two masses: diagonal + off-diagonal = 2 k / m
+            k = 2.0 * np.max(self.K_coh) * ties["tie_area"]
             np.add.at(w2, ties["tie_node"], k / m[ties["tie_node"]])
             if ties["kind"] == "quad":
                 xi, eta = ties["tie_xi"][:, 0], ties["tie_xi"][:, 1]
