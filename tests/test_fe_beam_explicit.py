@@ -108,3 +108,74 @@ def test_lumped_mass_total_and_stable_step_bounds_a_free_vibration():
 
     assert run(0.9 * dt_e)
     assert not run(2.5 * dt_e)
+
+
+def _random_chain_state(seed, n_wires=4, n_el=40, rot=0.6):
+    """Wires of a bundle in a random large-rotation state with random committed history."""
+    rng = np.random.default_rng(seed)
+    xs = np.linspace(0.0, 30.0, n_el + 1)
+    X, conn = [], []
+    for w in range(n_wires):
+        X.append(np.c_[xs, np.full_like(xs, 1.5 * w), np.zeros_like(xs)])
+        c = np.c_[np.arange(n_el), np.arange(1, n_el + 1)] + w * (n_el + 1)
+        conn.append(c)
+    X = np.vstack(X)
+    conn = np.vstack(conn).astype(np.int64)
+    R0 = initial_frames(X, conn)
+    # large rigid rotation of each wire + bending/stretching + large nodal spins
+    x = X.copy()
+    quat = np.zeros((X.shape[0], 4))
+    quat[:, 0] = 1.0
+    for w in range(n_wires):
+        sl = slice(w * (n_el + 1), (w + 1) * (n_el + 1))
+        spin = rng.normal(scale=1.2, size=3)
+        q = np.zeros((1, 4))
+        q[0, 0] = 1.0
+        rotate_nodes(q, spin[None, :])
+        from harnesspipe.fe.rotation import quat_to_matrix
+        Rw = np.zeros((3, 3))
+        quat_to_matrix(q[0], Rw)
+        xl = X[sl] - X[sl].mean(axis=0)
+        xl[:, 1] += 2.0 * np.sin(xl[:, 0] / 6.0)
+        xl[:, 2] += 1.0 * np.cos(xl[:, 0] / 5.0)
+        xl[:, 0] *= 1.0 + 0.01 * rng.normal()
+        x[sl] = xl @ Rw.T + X[sl].mean(axis=0)
+        quat[sl] = q[0]
+    rotate_nodes(quat, rng.normal(scale=rot, size=(X.shape[0], 3)))
+    return X, conn, R0, x, quat, rng
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_lean_forces_equal_element_response_at_large_rotations_with_yielding(seed):
+    from harnesspipe.fe.beam_explicit import beam_forces_reference
+    X, conn, R0, x, quat, rng = _random_chain_state(seed)
+    xi, w = lobatto_points(3)
+    secs = [disc_fibres(r, 3, 4) for r in (0.7, 0.6)]
+    sec = [np.ascontiguousarray(np.stack([s[k] for s in secs])) for k in range(3)]
+    mats = np.array([[4528.0, 4.52, 1327.0, 0.9], [5641.0, 4.95, 850.0, 0.78],
+                     [5641.0, 4.95, 850.0, 1.3]])
+    GJ = np.array([80.0, 50.0])
+    n_el = conn.shape[0]
+    sec_id = rng.integers(0, 2, n_el).astype(np.int64)
+    mat_id = rng.integers(0, 3, n_el).astype(np.int64)
+    ng, nf = xi.size, sec[0].shape[1]
+    alpha_c = np.where(rng.random((n_el, ng, nf)) < 0.5, rng.random((n_el, ng, nf)) * 5e-3, 0.0)
+    eps_p_c = alpha_c * rng.choice([-1.0, 1.0], size=alpha_c.shape) * rng.random(alpha_c.shape)
+    out = []
+    for fun, nch in ((beam_forces, 2), (beam_forces_reference, 2), (beam_forces, 1)):
+        h = [np.zeros((n_el, ng, nf)), np.zeros((n_el, ng, nf))]
+        f_el = np.zeros((n_el, 12))
+        f = np.zeros((X.shape[0], 6))
+        fun(X, conn, R0, x, quat, xi, w, *sec, GJ, sec_id, mats, mat_id, eps_p_c, alpha_c,
+            h[0], h[1], f_el, f, nch)
+        out.append((f_el, f, h))
+    (fe, f, h), (fe_r, f_r, h_r), (fe_1, f_1, h_1) = out
+    scale = np.abs(fe_r).max(axis=1, keepdims=True)
+    assert np.all(np.abs(fe - fe_r) <= 1e-12 * scale)          # per element, 1e-12 relative
+    assert np.abs(f - f_r).max() <= 1e-12 * np.abs(f_r).max()
+    np.testing.assert_array_equal(h[0], h_r[0])                 # same return map, same strains
+    np.testing.assert_array_equal(h[1], h_r[1])
+    np.testing.assert_array_equal(fe_1, fe)                     # chunking does not matter
+    assert (h[1] > alpha_c).sum() > 20                          # fibres yield in this step
+    # the state has large local rotations (Ts^-1, eta terms matter)
+    assert np.abs(f).max() > 1.0

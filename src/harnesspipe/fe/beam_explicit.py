@@ -33,12 +33,263 @@ import numpy as np
 from numba import njit, prange
 
 from harnesspipe.fe.beam import element_response
+from harnesspipe.fe.hardening import return_map
+from harnesspipe.fe.rotation import _ts_inv_coeff, log_matrix
+
+
+PARALLEL_MIN_EL = 64   # fewer elements per thread than this: one chunk (thread overhead)
+
+
+@njit(cache=True)
+def _section_force(e0, kappa_y, kappa_z, y, z, area, eps_p_c, alpha_c, eps_p_t, alpha_t, e, g,
+                   E, sigma_y, K, n):
+    """Stress resultants ``(N, M_y, M_z)`` of the fibre section, no tangent.
+
+    The arithmetic of :func:`harnesspipe.fe.fiber.section_response` (same fibre strain,
+    same return map, same summation order), so resultants and trial history are
+    bit-identical to it; the section tangent ``D`` is not formed.  History of element
+    ``e``, Gauss point ``g``: committed ``eps_p_c, alpha_c`` read, trial ``eps_p_t, alpha_t``
+    written (indexed in place).
+    """
+    s0 = s1 = s2 = 0.0
+    for f in range(y.shape[0]):
+        yf = y[f]
+        zf = z[f]
+        ep = eps_p_c[e, g, f]
+        al = alpha_c[e, g, f]
+        sig = E * (e0 + zf * kappa_y - yf * kappa_z - ep)
+        if abs(sig) > sigma_y:                  # possibly plastic: eq. 2 return
+            dg, _ = return_map(abs(sig), E, al, sigma_y, K, n)
+            if dg > 0.0:
+                dgs = dg if sig >= 0.0 else -dg
+                sig -= E * dgs
+                ep += dgs
+                al += dg
+        eps_p_t[e, g, f] = ep
+        alpha_t[e, g, f] = al
+        sa = sig * area[f]
+        s0 += sa
+        s1 += sa * zf
+        s2 -= sa * yf
+    return s0, s1, s2
+
+
+@njit(cache=True, inline="always")
+def _ts_inv_t_apply(th, m0, m1, m2):
+    """Ts^-T(theta) m = m + (theta x m)/2 + c(a) (theta (theta.m) - a^2 m) (a tuple)."""
+    a2 = th[0] * th[0] + th[1] * th[1] + th[2] * th[2]
+    c = _ts_inv_coeff(np.sqrt(a2))
+    tm = th[0] * m0 + th[1] * m1 + th[2] * m2
+    r0 = m0 + 0.5 * (th[1] * m2 - th[2] * m1) + c * (th[0] * tm - a2 * m0)
+    r1 = m1 + 0.5 * (th[2] * m0 - th[0] * m2) + c * (th[1] * tm - a2 * m1)
+    r2 = m2 + 0.5 * (th[0] * m1 - th[1] * m0) + c * (th[2] * tm - a2 * m2)
+    return r0, r1, r2
+
+
+@njit(cache=True)
+def element_force(e, a, b, X0, x, R0, Rg, ia, ib, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n,
+                  eps_p_c, alpha_c, eps_p_t, alpha_t, f_el, W, Rbar, th1, th2, v4):
+    """Global internal force ``f_el[e]`` (12) of element ``e`` (nodes ``a, b``), lean path.
+
+    Equals ``element_response(..., want_tangent=False)`` of :mod:`harnesspipe.fe.beam`;
+    ``Rg[ia]``, ``Rg[ib]`` hold the nodal rotation matrices (quat_to_matrix of
+    ``quat[a]``, ``quat[b]``).  The co-rotated frame, the local rotations, the fibre
+    resultants and the trial history use the arithmetic of element_response
+    (bit-identical); only the final mapping differs in round-off, because only what the
+    force needs is formed:
+
+    * ``Rg R0`` once per node (element_response forms it once per entry of Rr^T Rg R0);
+    * ``f_a = B_a^T f_l`` with ``Ts^-T m = m + (theta x m)/2 + c (theta (theta.m) - a^2 m)``
+      as a vector (no Ts^-1 matrix);
+    * ``f_g = B^T f_a`` from the ten nonzeros of ``G^T`` in closed form: with
+      ``m = m1 + m2``, ``g = G^T m``, the local blocks ``-g_u1, m1 - g_w1, -g_u2, m2 - g_w2``
+      are rotated by ``Rr`` and the axial force ``N r1`` is added to the translations
+      (no 7x12 B matrix);
+    * no section tangent D, no K_l, K_a, K_h, K_m.
+
+    Arrays are indexed in place (no per-element views).  Work: W (4, 3, 3) holding
+    Rg1 R0, Rg2 R0, Rr, qv; Rbar (3, 3), th1, th2 (3), v4 (4).
+    """
+    # P_i = Rg_i R0 (order of local_rotation), q1, q2 = its 2nd columns (corotated_frame)
+    for k in range(3):
+        for j in range(3):
+            t1 = 0.0
+            t2 = 0.0
+            for m in range(3):
+                t1 += Rg[ia, k, m] * R0[e, m, j]
+                t2 += Rg[ib, k, m] * R0[e, m, j]
+            W[0, k, j] = t1
+            W[1, k, j] = t2
+    # co-rotated frame (arithmetic of harnesspipe.fe.beam.corotated_frame)
+    ln = 0.0
+    for i in range(3):
+        W[2, i, 0] = x[b, i] - x[a, i]
+        ln += W[2, i, 0] ** 2
+    ln = np.sqrt(ln)
+    for i in range(3):
+        W[2, i, 0] /= ln
+        W[3, i, 0] = W[0, i, 1]
+        W[3, i, 1] = W[1, i, 1]
+        W[3, i, 2] = 0.5 * (W[0, i, 1] + W[1, i, 1])
+    r10 = W[2, 0, 0]
+    r11 = W[2, 1, 0]
+    r12 = W[2, 2, 0]
+    q0 = W[3, 0, 2]
+    q1 = W[3, 1, 2]
+    q2 = W[3, 2, 2]
+    c0 = r11 * q2 - r12 * q1
+    c1 = r12 * q0 - r10 * q2
+    c2 = r10 * q1 - r11 * q0
+    s = np.sqrt(c0 ** 2 + c1 ** 2 + c2 ** 2)
+    c0 /= s
+    c1 /= s
+    c2 /= s
+    W[2, 0, 2] = c0
+    W[2, 1, 2] = c1
+    W[2, 2, 2] = c2
+    W[2, 0, 1] = c1 * r12 - c2 * r11
+    W[2, 1, 1] = c2 * r10 - c0 * r12
+    W[2, 2, 1] = c0 * r11 - c1 * r10
+    l0 = np.sqrt((X0[b, 0] - X0[a, 0]) ** 2 + (X0[b, 1] - X0[a, 1]) ** 2
+                 + (X0[b, 2] - X0[a, 2]) ** 2)
+    # local rotations theta_i = log(Rr^T P_i) (arithmetic of local_rotation)
+    for node in range(2):
+        for i in range(3):
+            for j in range(3):
+                acc = 0.0
+                for k in range(3):
+                    acc += W[2, k, i] * W[node, k, j]
+                Rbar[i, j] = acc
+        log_matrix(Rbar, th1 if node == 0 else th2, v4)
+    # local force f_l (as local_bernoulli, same summation order)
+    f0 = f2 = f3 = f5 = f6 = 0.0
+    e0 = (ln - l0) / l0
+    inv_l0 = 1.0 / l0
+    for g in range(xi_g.shape[0]):
+        xi = xi_g[g]
+        b1 = (6.0 * xi - 4.0) / l0
+        b2 = (6.0 * xi - 2.0) / l0
+        ky = b1 * th1[1] + b2 * th2[1]
+        kz = b1 * th1[2] + b2 * th2[2]
+        s0, s1, s2 = _section_force(e0, ky, kz, y, z, area, eps_p_c, alpha_c, eps_p_t,
+                                    alpha_t, e, g, E, sigma_y, K, n)
+        wl = w_g[g] * l0
+        f0 += (wl * inv_l0) * s0
+        f2 += (wl * b1) * s1
+        f5 += (wl * b2) * s1
+        f3 += (wl * b1) * s2
+        f6 += (wl * b2) * s2
+    torque = GJ / l0 * (th2[0] - th1[0])
+    # f_a = B_a^T f_l
+    N = f0
+    m10, m11, m12 = _ts_inv_t_apply(th1, -torque, f2, f3)
+    m20, m21, m22 = _ts_inv_t_apply(th2, torque, f5, f6)
+    # g = G^T m, m = m1 + m2 (the nonzeros of G^T of harnesspipe.fe.beam._g_matrix)
+    M1 = m10 + m20
+    M2 = m11 + m21
+    M3 = m12 + m22
+    ql1 = ql2 = a11 = a12 = a21 = a22 = 0.0
+    for k in range(3):
+        ql1 += W[2, k, 0] * W[3, k, 2]
+        ql2 += W[2, k, 1] * W[3, k, 2]
+        a11 += W[2, k, 0] * W[3, k, 0]
+        a12 += W[2, k, 1] * W[3, k, 0]
+        a21 += W[2, k, 0] * W[3, k, 1]
+        a22 += W[2, k, 1] * W[3, k, 1]
+    eta = ql1 / ql2
+    gu1 = -M3 / ln                      # g[1] = -g[7]
+    gu2 = (eta * M1 + M2) / ln          # g[2] = -g[8]
+    h = 0.5 * M1 / ql2                  # g[3:5] = h (a12, -a11), g[9:11] = h (a22, -a21)
+    w10 = m10 - h * a12
+    w11 = m11 + h * a11
+    w20 = m20 - h * a22
+    w21 = m21 + h * a21
+    for i in range(3):
+        r0 = W[2, i, 0]
+        r1 = W[2, i, 1]
+        r2 = W[2, i, 2]
+        tu = r1 * gu1 + r2 * gu2
+        f_el[e, i] = -r0 * N - tu
+        f_el[e, 6 + i] = r0 * N + tu
+        f_el[e, 3 + i] = r0 * w10 + r1 * w11 + r2 * m12
+        f_el[e, 9 + i] = r0 * w20 + r1 * w21 + r2 * m22
+
+
+@njit(cache=True, inline="always")
+def _quat_to_matrix_at(quat, a, Rg, i):
+    """Rg[i] = rotation matrix of quat[a] (the arithmetic of rotation.quat_to_matrix)."""
+    q0 = quat[a, 0]
+    q1 = quat[a, 1]
+    q2 = quat[a, 2]
+    q3 = quat[a, 3]
+    Rg[i, 0, 0] = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3
+    Rg[i, 0, 1] = 2.0 * (q1 * q2 - q0 * q3)
+    Rg[i, 0, 2] = 2.0 * (q1 * q3 + q0 * q2)
+    Rg[i, 1, 0] = 2.0 * (q1 * q2 + q0 * q3)
+    Rg[i, 1, 1] = q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3
+    Rg[i, 1, 2] = 2.0 * (q2 * q3 - q0 * q1)
+    Rg[i, 2, 0] = 2.0 * (q1 * q3 - q0 * q2)
+    Rg[i, 2, 1] = 2.0 * (q2 * q3 + q0 * q1)
+    Rg[i, 2, 2] = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
 
 
 @njit(cache=True, parallel=True)
 def beam_forces(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area, sec_GJ, sec_id,
                 mats, mat_id, eps_p_c, alpha_c, eps_p_t, alpha_t, f_el, f_int, n_chunks):
     """Add the internal (resisting) forces of all beam elements into ``f_int`` (n_nodes, 6).
+
+    ``X0``/``x`` (n_nodes, 3) reference and current positions, ``quat`` (n_nodes, 4) nodal
+    rotations, ``conn`` (n_el, 2) global node ids, ``R0`` (n_el, 3, 3) initial frames;
+    ``sec_y, sec_z, sec_area`` (n_sec, n_fib) fibre data, ``sec_GJ`` (n_sec,);
+    ``mats`` (n_mat, 4) rows (E, sigma_y, K, n); history (n_el, n_gauss, n_fib): committed
+    ``eps_p_c, alpha_c`` are read, trial ``eps_p_t, alpha_t`` written; ``f_el`` (n_el, 12)
+    scratch; ``n_chunks`` the number of parallel chunks (``numba.get_num_threads()``).
+
+    Lean force-only path (:func:`element_force`).  Each chunk takes a contiguous range
+    of elements, so the rotation matrix of a node shared with the previous element of a
+    chain (``conn[e, 0] == conn[e - 1, 1]``) is reused, not rebuilt from its quaternion.
+    With fewer than ``PARALLEL_MIN_EL`` elements per chunk the chunks are merged.
+    """
+    n_el = conn.shape[0]
+    n_chunks = max(1, min(n_chunks, n_el // PARALLEL_MIN_EL))
+    size = (n_el + n_chunks - 1) // n_chunks
+    for c in prange(n_chunks):
+        W = np.empty((4, 3, 3))
+        Rbar = np.empty((3, 3))
+        Rg = np.empty((2, 3, 3))
+        th1 = np.empty(3)
+        th2 = np.empty(3)
+        v4 = np.empty(4)
+        last = -1                       # node whose matrix is in Rg[1 - ia]
+        ia = 0                          # Rg[ia] holds node a, Rg[1 - ia] node b
+        for e in range(c * size, min(n_el, (c + 1) * size)):
+            a = conn[e, 0]
+            b = conn[e, 1]
+            k = sec_id[e]
+            m = mat_id[e]
+            if a == last:               # node a was node b of the previous element
+                ia = 1 - ia
+            else:
+                _quat_to_matrix_at(quat, a, Rg, ia)
+            _quat_to_matrix_at(quat, b, Rg, 1 - ia)
+            last = b
+            element_force(e, a, b, X0, x, R0, Rg, ia, 1 - ia, xi_g, w_g, sec_y[k], sec_z[k],
+                          sec_area[k], sec_GJ[k], mats[m, 0], mats[m, 1], mats[m, 2], mats[m, 3],
+                          eps_p_c, alpha_c, eps_p_t, alpha_t, f_el, W, Rbar, th1, th2, v4)
+    for e in range(n_el):
+        a = conn[e, 0]
+        b = conn[e, 1]
+        for i in range(6):
+            f_int[a, i] += f_el[e, i]
+            f_int[b, i] += f_el[e, 6 + i]
+
+
+@njit(cache=True, parallel=True)
+def beam_forces_reference(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area, sec_GJ,
+                          sec_id, mats, mat_id, eps_p_c, alpha_c, eps_p_t, alpha_t, f_el, f_int,
+                          n_chunks):
+    """Reference for :func:`beam_forces` through ``element_response(want_tangent=False)`` of
+    :mod:`harnesspipe.fe.beam` (kept for tests and benchmarks; same arguments).
 
     ``X0``/``x`` (n_nodes, 3) reference and current positions, ``quat`` (n_nodes, 4) nodal
     rotations, ``conn`` (n_el, 2) global node ids, ``R0`` (n_el, 3, 3) initial frames;
