@@ -380,3 +380,63 @@ def test_cohesive_compression_no_damage_and_rigid_rotation_free():
     assert np.allclose(fc[2, :3], -K[0] * 0.01 * 1.5 * nrm)
     assert np.allclose(fc[:2, :3].sum(0), K[0] * 0.01 * 1.5 * nrm)
     assert fc[1, :3] == pytest.approx(0.5 * fc[0, :3])               # s = 1/3 weights
+
+
+# ------------------------------------------------------------- early rejects (candidates)
+def test_far_candidates_change_nothing():
+    """All-pairs candidate lists (mostly far apart: rejected early) give the same forces and
+    history as the tight box_pairs lists, step after step, for wire-wire and node-facet."""
+    rng = np.random.default_rng(7)
+    n_w, n_s = 6, 8
+    xs = np.linspace(0.0, 8.0, n_s + 1)
+    xw = np.vstack([np.c_[xs, np.full_like(xs, 1.25 * (w % 3)), np.full_like(xs, 1.25 * (w // 3))]
+                    for w in range(n_w)])
+    seg = np.vstack([np.c_[np.arange(n_s), np.arange(1, n_s + 1)] + w * (n_s + 1)
+                     for w in range(n_w)]).astype(np.int64)
+    body = np.repeat(np.arange(n_w), n_s)
+    xp, quads = _plate(4, 10.0, z=-0.8)
+    xp[:, 0] += 4.0
+    xp[:, 1] += 1.25
+    x0 = np.vstack([xw, xp])
+    quads = quads + len(xw)
+    nodes = np.arange(len(xw))
+    r = np.full(len(nodes), R_W)
+    t = np.full(len(quads), 0.3)
+    sign = np.ones(len(quads))
+    all_ww = np.array([[a, b] for a in range(len(seg)) for b in range(a + 1, len(seg))])
+    all_nf = np.array([[i, q] for i in range(len(nodes)) for q in range(len(quads))])
+    runs = []
+    for tight in (True, False):
+        x = x0.copy()
+        hw = new_slot_history(len(seg), 8, points=2)
+        hf = new_slot_history(len(nodes), 8)
+        rng = np.random.default_rng(1)
+        out = []
+        for step in range(12):
+            v = np.zeros((len(x), 6))
+            v[:len(xw), :3] = rng.normal(scale=20.0, size=(len(xw), 3))
+            v[:len(xw), 2] -= 30.0                 # press the wires onto each other and the plate
+            x[:, :3] += 1e-3 * v[:, :3]
+            if tight:
+                lo, hi = segment_aabbs(x, seg, np.full(len(seg), R_W), 0.5)
+                pw = box_pairs(lo, hi, lo, hi, 2.0, True)
+                lo_n, hi_n = node_aabbs(x, nodes, r, 0.5)
+                lo_q, hi_q = quad_aabbs(x, quads, 0.5 * t, 0.5)
+                pf = box_pairs(lo_n, hi_n, lo_q, hi_q, 2.0, False)
+            else:
+                pw, pf = all_ww, all_nf
+            fn, ft = _z(len(x)), _z(len(x))
+            n1 = beam_beam_contact(x, v, seg, np.full(len(seg), R_W), body, pw, 100.0, 50.0,
+                                   0.4, 0.1, 2.0, 1e-3, 1.0, hw[0], hw[1], fn, ft)
+            n2 = node_facet_contact(x, v, nodes, r, quads, t, sign, pf, 100.0, 50.0, 0.4, 0.1,
+                                    2.0, 1e-3, 1.0, 1.0, hf[0], hf[1], fn, ft)
+            out.append((n1, n2, fn.copy(), ft.copy()))
+        runs.append((out, hw, hf))
+    (o1, hw1, hf1), (o2, hw2, hf2) = runs
+    assert sum(o[0] for o in o1) > 10 and sum(o[1] for o in o1) > 10    # contacts happen
+    for a, b in zip(o1, o2):
+        assert a[0] == b[0] and a[1] == b[1]
+        np.testing.assert_allclose(a[2], b[2], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(a[3], b[3], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(hf1[1], hf2[1], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(hf1[0], hf2[0])

@@ -17,8 +17,12 @@ increment of the step that led to ``x`` is ``v dt``.  Force arrays are (n_nodes,
 every kernel ADDS the forces acting ON the nodes into them, normal (penalty) forces in
 ``f_n``, tangential friction forces in ``f_t`` and cohesive forces in their own array
 ``f_c`` (so that the caller can account the work of each; frictional dissipation is the
-work of ``f_t``).  Pair loops run in ``prange`` into per-pair arrays, then a serial
-scatter adds them to the nodes (no races).
+work of ``f_t``).  Pair loops run in ``prange`` (serially when short: SERIAL_MAX_CHUNKS) into
+per-pair arrays, then a serial scatter adds them to the nodes (no races).  Wire-wire first
+flags the touching pairs (with an early bounding-box reject of far candidates), then
+computes forces and friction for those only; node-facet rejects pairs whose node is far
+from the quad's box before projecting (see :func:`_nf_project`) and updates its history
+in place.
 
 History.  Each call is one committed explicit step: friction and cohesive history
 arrays are updated IN PLACE.  Do not call a kernel twice for the same step.
@@ -54,6 +58,8 @@ PARALLEL_COS = 0.98     # |cos| of two segments above which wire-wire uses the p
 EDGE_TOL = 0.05         # half width (in xi) of the partition-of-unity band at quad edges
 DEFAULT_MAXS = 8
 CHUNK = 64              # items per parallel task (scratch arrays are allocated per task)
+SERIAL_MAX_CHUNKS = 2   # up to this many tasks a loop runs serially (no parallel-region cost)
+REJECT_TOL = 1e-9       # relative slack of the early distance rejects (round-off of the points)
 
 
 def new_slot_history(n_owner, maxs=DEFAULT_MAXS, points=1):
@@ -373,101 +379,47 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
     for e in range(seg.shape[0]):
         valence[seg[e, 0]] += 1
         valence[seg[e, 1]] += 1
-    npt = np.empty(n_pairs, dtype=np.int64)
-    act = np.empty((n_pairs, 2), dtype=np.bool_)
-    ps = np.empty((n_pairs, 2))
-    pu = np.empty((n_pairs, 2))
-    pw = np.empty((n_pairs, 2))
-    pfn = np.empty((n_pairs, 2, 3))     # weighted normal force on a's point
-    pft = np.empty((n_pairs, 2, 3))     # weighted friction force on a's point
-    hnew = np.empty((n_pairs, 2, 3))    # new friction history (per unit weight)
-    dt_phys = dt * time_scale
+    # phase 1: which pairs touch, and at which of their points (no per-pair float arrays)
+    flag = np.empty(n_pairs, dtype=np.int8)
     n_chunks = (n_pairs + CHUNK - 1) // CHUNK
-    for ch in prange(n_chunks):
-        scr = np.zeros((4, 3))      # per-task scratch
-        for p in range(ch * CHUNK, min(n_pairs, (ch + 1) * CHUNK)):
-            npt[p] = 0
-            act[p, 0] = False
-            act[p, 1] = False
-            for k in range(2):
-                for c in range(3):
-                    pfn[p, k, c] = 0.0
-                    pft[p, k, c] = 0.0
-                    hnew[p, k, c] = 0.0
-            a = pairs[p, 0]
-            b = pairs[p, 1]
-            if a > b:
-                a, b = b, a
-            if a == b or seg_body[a] == seg_body[b]:
-                continue
-            m = _segment_points(x, seg, a, b, valence, ps[p], pu[p], pw[p])
-            npt[p] = m
-            if m == 0:
-                continue
-            slot = -2                        # looked up at the first active point
-            a0 = seg[a, 0]
-            a1 = seg[a, 1]
-            b0 = seg[b, 0]
-            b1 = seg[b, 1]
-            rr = seg_r[a] + seg_r[b]
-            fold = scr[0]
-            dg = scr[1]
-            ds = scr[2]
-            nv = scr[3]
-            for k in range(m):
-                s = ps[p, k]
-                u = pu[p, k]
-                dist2 = 0.0
-                for c in range(3):
-                    pa = (1 - s) * x[a0, c] + s * x[a1, c]
-                    pb = (1 - u) * x[b0, c] + u * x[b1, c]
-                    nv[c] = pa - pb
-                    dist2 += nv[c] * nv[c]
-                dist = math.sqrt(dist2)
-                gap = dist - rr
-                if gap >= 0.0:
-                    continue
-                act[p, k] = True
-                if dist > 1e-12 * rr:
-                    for c in range(3):
-                        nv[c] /= dist
-                else:
-                    for c in range(3):
-                        dg[c] = x[a1, c] - x[a0, c]
-                    _any_perpendicular(dg, nv)
-                pn = -k_n * gap
-                w = pw[p, k]
-                for c in range(3):
-                    pfn[p, k, c] = w * pn * nv[c]
-                if k_t <= 0.0:
-                    continue
-                if slot == -2:
-                    slot = _find_slot(hist_partner, seg, a, b)
-                for c in range(3):
-                    fold[c] = hist_ft[a, slot, k, c] if slot >= 0 else 0.0
-                    dg[c] = dt * ((1 - s) * v[a0, c] + s * v[a1, c]
-                                  - (1 - u) * v[b0, c] - u * v[b1, c])
-                _rotate_onto_plane(fold, nv)
-                dgn = _dot(dg, nv)
-                for c in range(3):
-                    dg[c] -= dgn * nv[c]
-                rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn,
-                                        hnew[p, k], ds)
-                for c in range(3):
-                    pft[p, k, c] = -w * hnew[p, k, c]
-            if m == 1:
-                for c in range(3):
-                    hnew[p, 1, c] = hnew[p, 0, c]
-    # serial: commit history, scatter forces
+    if n_chunks <= SERIAL_MAX_CHUNKS:
+        _ww_flags(x, seg, seg_r, seg_body, pairs, valence, 0, n_pairs, flag)
+    else:
+        for ch in prange(n_chunks):
+            _ww_flags(x, seg, seg_r, seg_body, pairs, valence, ch * CHUNK,
+                      min(n_pairs, (ch + 1) * CHUNK), flag)
+    n_act = 0
+    for p in range(n_pairs):
+        if flag[p] != 0:
+            n_act += 1
+    idx = np.empty(n_act, dtype=np.int64)
+    j = 0
+    for p in range(n_pairs):
+        if flag[p] != 0:
+            idx[j] = p
+            j += 1
+    # phase 2: forces and friction of the touching pairs only
+    ps = np.empty((n_act, 2))
+    pu = np.empty((n_act, 2))
+    pfn = np.empty((n_act, 2, 3))     # weighted normal force on a's point
+    pft = np.empty((n_act, 2, 3))     # weighted friction force on a's point
+    hnew = np.empty((n_act, 2, 3))    # new friction history (per unit weight)
+    dt_phys = dt * time_scale
+    n_chunks = (n_act + CHUNK - 1) // CHUNK
+    if n_chunks <= SERIAL_MAX_CHUNKS:
+        _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k, d_c, dt,
+                   dt_phys, hist_partner, hist_ft, 0, n_act, ps, pu, pfn, pft, hnew)
+    else:
+        for ch in prange(n_chunks):
+            _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k, d_c,
+                       dt, dt_phys, hist_partner, hist_ft, ch * CHUNK,
+                       min(n_act, (ch + 1) * CHUNK), ps, pu, pfn, pft, hnew)
+    # serial: commit history, scatter forces (in pair order)
     for i in range(hist_partner.shape[0]):
         for s in range(hist_partner.shape[1]):
             hist_partner[i, s] = -1
-    n_active = 0
-    for p in range(n_pairs):
-        m = npt[p]
-        if m == 0 or not (act[p, 0] or act[p, 1]):
-            continue
-        n_active += 1
+    for j in range(n_act):
+        p = idx[j]
         a = pairs[p, 0]
         b = pairs[p, 1]
         if a > b:
@@ -477,19 +429,19 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
             hist_partner[a, slot] = b
             for k in range(2):
                 for c in range(3):
-                    hist_ft[a, slot, k, c] = hnew[p, k, c]
+                    hist_ft[a, slot, k, c] = hnew[j, k, c]
         a0 = seg[a, 0]
         a1 = seg[a, 1]
         b0 = seg[b, 0]
         b1 = seg[b, 1]
-        for k in range(m):
-            if not act[p, k]:
+        for k in range(2):
+            if not (flag[p] >> k) & 1:
                 continue
-            s = ps[p, k]
-            u = pu[p, k]
+            s = ps[j, k]
+            u = pu[j, k]
             for c in range(3):
-                fn = pfn[p, k, c]
-                ft = pft[p, k, c]
+                fn = pfn[j, k, c]
+                ft = pft[j, k, c]
                 f_n[a0, c] += (1 - s) * fn
                 f_n[a1, c] += s * fn
                 f_n[b0, c] -= (1 - u) * fn
@@ -498,7 +450,130 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
                 f_t[a1, c] += s * ft
                 f_t[b0, c] -= (1 - u) * ft
                 f_t[b1, c] -= u * ft
-    return n_active
+    return n_act
+
+
+@njit(cache=True)
+def _boxes_apart(x, a0, a1, b0, b1, r):
+    """True if the bounding boxes of segments (a0, a1) and (b0, b1) are farther apart than
+    ``r``: then every point pair of the segments is, and no contact point can touch."""
+    d2 = 0.0
+    for c in range(3):
+        lo_a = min(x[a0, c], x[a1, c])
+        hi_a = max(x[a0, c], x[a1, c])
+        lo_b = min(x[b0, c], x[b1, c])
+        hi_b = max(x[b0, c], x[b1, c])
+        d = max(lo_b - hi_a, lo_a - hi_b)
+        if d > 0.0:
+            d2 += d * d
+    return d2 > (r * (1.0 + REJECT_TOL)) ** 2
+
+
+@njit(cache=True)
+def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag):
+    """flag[p] for pairs p0..p1-1: bit k set if contact point k of the pair penetrates."""
+    sv = np.empty(2)
+    uv = np.empty(2)
+    wv = np.empty(2)
+    for p in range(p0, p1):
+        flag[p] = 0
+        a = pairs[p, 0]
+        b = pairs[p, 1]
+        if a > b:
+            a, b = b, a
+        if a == b or seg_body[a] == seg_body[b]:
+            continue
+        a0 = seg[a, 0]
+        a1 = seg[a, 1]
+        b0 = seg[b, 0]
+        b1 = seg[b, 1]
+        rr = seg_r[a] + seg_r[b]
+        if _boxes_apart(x, a0, a1, b0, b1, rr):     # early reject (most candidates)
+            continue
+        m = _segment_points(x, seg, a, b, valence, sv, uv, wv)
+        f = 0
+        for k in range(m):
+            s = sv[k]
+            u = uv[k]
+            dist2 = 0.0
+            for c in range(3):
+                d = ((1 - s) * x[a0, c] + s * x[a1, c]) - ((1 - u) * x[b0, c] + u * x[b1, c])
+                dist2 += d * d
+            if not (math.sqrt(dist2) - rr >= 0.0):
+                f |= 1 << k
+        flag[p] = f
+
+
+@njit(cache=True)
+def _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k, d_c, dt,
+               dt_phys, hist_partner, hist_ft, j0, j1, ps, pu, pfn, pft, hnew):
+    """Normal and friction forces of the touching pairs idx[j0:j1] (compact arrays by j)."""
+    scr = np.zeros((4, 3))
+    wv = np.empty(2)
+    for j in range(j0, j1):
+        p = idx[j]
+        for k in range(2):
+            for c in range(3):
+                pfn[j, k, c] = 0.0
+                pft[j, k, c] = 0.0
+                hnew[j, k, c] = 0.0
+        a = pairs[p, 0]
+        b = pairs[p, 1]
+        if a > b:
+            a, b = b, a
+        m = _segment_points(x, seg, a, b, valence, ps[j], pu[j], wv)
+        slot = -2                        # looked up at the first active point
+        a0 = seg[a, 0]
+        a1 = seg[a, 1]
+        b0 = seg[b, 0]
+        b1 = seg[b, 1]
+        rr = seg_r[a] + seg_r[b]
+        fold = scr[0]
+        dg = scr[1]
+        ds = scr[2]
+        nv = scr[3]
+        for k in range(m):
+            if not (flag[p] >> k) & 1:
+                continue
+            s = ps[j, k]
+            u = pu[j, k]
+            dist2 = 0.0
+            for c in range(3):
+                pa = (1 - s) * x[a0, c] + s * x[a1, c]
+                pb = (1 - u) * x[b0, c] + u * x[b1, c]
+                nv[c] = pa - pb
+                dist2 += nv[c] * nv[c]
+            dist = math.sqrt(dist2)
+            gap = dist - rr
+            if dist > 1e-12 * rr:
+                for c in range(3):
+                    nv[c] /= dist
+            else:
+                for c in range(3):
+                    dg[c] = x[a1, c] - x[a0, c]
+                _any_perpendicular(dg, nv)
+            pn = -k_n * gap
+            w = wv[k]
+            for c in range(3):
+                pfn[j, k, c] = w * pn * nv[c]
+            if k_t <= 0.0:
+                continue
+            if slot == -2:
+                slot = _find_slot(hist_partner, seg, a, b)
+            for c in range(3):
+                fold[c] = hist_ft[a, slot, k, c] if slot >= 0 else 0.0
+                dg[c] = dt * ((1 - s) * v[a0, c] + s * v[a1, c]
+                              - (1 - u) * v[b0, c] - u * v[b1, c])
+            _rotate_onto_plane(fold, nv)
+            dgn = _dot(dg, nv)
+            for c in range(3):
+                dg[c] -= dgn * nv[c]
+            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew[j, k], ds)
+            for c in range(3):
+                pft[j, k, c] = -w * hnew[j, k, c]
+        if m == 1:
+            for c in range(3):
+                hnew[j, 1, c] = hnew[j, 0, c]
 
 
 # -------------------------------------------------------- (b) nodes on rigid cylinders
@@ -532,54 +607,14 @@ def node_cylinder_contact(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, 
     work = np.zeros((n_cn, n_cyl, 3))
     count = np.zeros(n_cn, dtype=np.int64)
     n_chunks = (n_cn + CHUNK - 1) // CHUNK
-    for ch in prange(n_chunks):
-        scr = np.zeros((5, 3))      # per-task scratch
-        for i in range(ch * CHUNK, min(n_cn, (ch + 1) * CHUNK)):
-            nd = nodes[i]
-            nv = scr[0]
-            dg = scr[1]
-            fold = scr[2]
-            ds = scr[3]
-            fnew = scr[4]
-            for c in range(n_cyl):
-                ax0 = cyl_axis[c, 0]
-                ax1 = cyl_axis[c, 1]
-                ax2 = cyl_axis[c, 2]
-                d0 = x[nd, 0] - cyl_c[c, 0]
-                d1 = x[nd, 1] - cyl_c[c, 1]
-                d2 = x[nd, 2] - cyl_c[c, 2]
-                al = d0 * ax0 + d1 * ax1 + d2 * ax2
-                inside = abs(al) <= cyl_half_len[c]
-                nv[0] = d0 - al * ax0
-                nv[1] = d1 - al * ax1
-                nv[2] = d2 - al * ax2
-                dist = math.sqrt(_dot(nv, nv))
-                gap = dist - cyl_R[c] - node_r[i]
-                if (not inside) or gap >= 0.0 or dist <= 0.0:
-                    for k in range(3):
-                        hist_ft[i, c, k] = 0.0
-                    continue
-                count[i] += 1
-                for k in range(3):
-                    nv[k] /= dist
-                pn = -k_n * gap
-                for k in range(3):
-                    f_n[nd, k] += pn * nv[k]
-                    work[i, c, k] -= pn * nv[k]
-                if k_t <= 0.0 or node_mu[i] <= 0.0:
-                    continue
-                for k in range(3):
-                    fold[k] = hist_ft[i, c, k]
-                    dg[k] = dt * (v[nd, k] - cyl_v[c, k])
-                _rotate_onto_plane(fold, nv)
-                dgn = _dot(dg, nv)
-                for k in range(3):
-                    dg[k] -= dgn * nv[k]
-                coulomb_return_map(fold, dg, k_t, node_mu[i], pn, fnew, ds)
-                for k in range(3):
-                    hist_ft[i, c, k] = fnew[k]
-                    f_t[nd, k] -= fnew[k]
-                    work[i, c, k] += fnew[k]
+    if n_chunks <= SERIAL_MAX_CHUNKS:
+        _cyl_range(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, cyl_half_len, cyl_v,
+                   k_n, k_t, dt, hist_ft, f_n, f_t, work, count, 0, n_cn)
+    else:
+        for ch in prange(n_chunks):
+            _cyl_range(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, cyl_half_len,
+                       cyl_v, k_n, k_t, dt, hist_ft, f_n, f_t, work, count, ch * CHUNK,
+                       min(n_cn, (ch + 1) * CHUNK))
     n_active = 0
     for i in range(n_cn):
         n_active += count[i]
@@ -587,6 +622,60 @@ def node_cylinder_contact(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, 
             for k in range(3):
                 f_cyl[c, k] += work[i, c, k]
     return n_active
+
+
+@njit(cache=True)
+def _cyl_range(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, cyl_half_len, cyl_v, k_n,
+               k_t, dt, hist_ft, f_n, f_t, work, count, i0, i1):
+    """Nodes i0..i1-1 of :func:`node_cylinder_contact` (nodes are unique: no races)."""
+    n_cyl = cyl_c.shape[0]
+    scr = np.zeros((5, 3))
+    for i in range(i0, i1):
+        nd = nodes[i]
+        nv = scr[0]
+        dg = scr[1]
+        fold = scr[2]
+        ds = scr[3]
+        fnew = scr[4]
+        for c in range(n_cyl):
+            ax0 = cyl_axis[c, 0]
+            ax1 = cyl_axis[c, 1]
+            ax2 = cyl_axis[c, 2]
+            d0 = x[nd, 0] - cyl_c[c, 0]
+            d1 = x[nd, 1] - cyl_c[c, 1]
+            d2 = x[nd, 2] - cyl_c[c, 2]
+            al = d0 * ax0 + d1 * ax1 + d2 * ax2
+            inside = abs(al) <= cyl_half_len[c]
+            nv[0] = d0 - al * ax0
+            nv[1] = d1 - al * ax1
+            nv[2] = d2 - al * ax2
+            dist = math.sqrt(_dot(nv, nv))
+            gap = dist - cyl_R[c] - node_r[i]
+            if (not inside) or gap >= 0.0 or dist <= 0.0:
+                for k in range(3):
+                    hist_ft[i, c, k] = 0.0
+                continue
+            count[i] += 1
+            for k in range(3):
+                nv[k] /= dist
+            pn = -k_n * gap
+            for k in range(3):
+                f_n[nd, k] += pn * nv[k]
+                work[i, c, k] -= pn * nv[k]
+            if k_t <= 0.0 or node_mu[i] <= 0.0:
+                continue
+            for k in range(3):
+                fold[k] = hist_ft[i, c, k]
+                dg[k] = dt * (v[nd, k] - cyl_v[c, k])
+            _rotate_onto_plane(fold, nv)
+            dgn = _dot(dg, nv)
+            for k in range(3):
+                dg[k] -= dgn * nv[k]
+            coulomb_return_map(fold, dg, k_t, node_mu[i], pn, fnew, ds)
+            for k in range(3):
+                hist_ft[i, c, k] = fnew[k]
+                f_t[nd, k] -= fnew[k]
+                work[i, c, k] += fnew[k]
 
 
 # ------------------------------------------------------ (c) nodes on shell facets (quads)
@@ -631,40 +720,17 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
     n_pairs = pairs.shape[0]
     n_cn = nodes.shape[0]
     dt_phys = dt * time_scale
+    t_max = 0.0
+    for q in range(quad_t.shape[0]):
+        t_max = max(t_max, quad_t[q])
     pd = np.empty((n_pairs, 9))     # xi, eta, dist(signed), n(3) force direction, X(3)
     n_chunks = (n_pairs + CHUNK - 1) // CHUNK
-    for ch in prange(n_chunks):
-        prj = np.zeros(8)
-        for p in range(ch * CHUNK, min(n_pairs, (ch + 1) * CHUNK)):
-            i = pairs[p, 0]
-            q = pairs[p, 1]
-            nd = nodes[i]
-            pd[p, 2] = np.inf
-            if (quads[q, 0] == nd or quads[q, 1] == nd or quads[q, 2] == nd
-                    or quads[q, 3] == nd):
-                continue
-            _project_quad(x, quads, q, x[nd], True, prj)
-            d0 = x[nd, 0] - prj[2]
-            d1 = x[nd, 1] - prj[3]
-            d2 = x[nd, 2] - prj[4]
-            dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            sg = quad_sign[q]
-            side = sg * (d0 * prj[5] + d1 * prj[6] + d2 * prj[7])
-            pd[p, 0] = prj[0]
-            pd[p, 1] = prj[1]
-            pd[p, 6] = prj[2]
-            pd[p, 7] = prj[3]
-            pd[p, 8] = prj[4]
-            if side >= 0.0 and dist > 1e-12:
-                pd[p, 2] = dist
-                pd[p, 3] = d0 / dist
-                pd[p, 4] = d1 / dist
-                pd[p, 5] = d2 / dist
-            else:                    # behind the mid-surface: push out along the normal
-                pd[p, 2] = -dist
-                pd[p, 3] = sg * prj[5]
-                pd[p, 4] = sg * prj[6]
-                pd[p, 5] = sg * prj[7]
+    if n_chunks <= SERIAL_MAX_CHUNKS:
+        _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, 0, n_pairs, pd)
+    else:
+        for ch in prange(n_chunks):
+            _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, ch * CHUNK,
+                        min(n_pairs, (ch + 1) * CHUNK), pd)
     # closest facet per node (pairs are grouped by node)
     best = -np.ones(n_cn, dtype=np.int64)
     for p in range(n_pairs):
@@ -674,11 +740,9 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
         b = best[i]
         if b < 0 or abs(pd[p, 2]) < abs(pd[b, 2]):
             best[i] = p
-    hist_old = hist_ft.copy()
-    part_old = hist_partner.copy()
-    for i in range(hist_partner.shape[0]):
-        for s in range(hist_partner.shape[1]):
-            hist_partner[i, s] = -1
+    # node by node: each row of the history is read (old slot) before it is rewritten, so
+    # the history is updated in place (no copies)
+    maxs = hist_partner.shape[1]
     fold = np.zeros(3)
     dg = np.zeros(3)
     ds = np.zeros(3)
@@ -688,13 +752,13 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
     n_active = 0
     for i in range(n_cn):
         p = best[i]
-        if p < 0:
+        q = pairs[p, 1] if p >= 0 else -1
+        gap = pd[p, 2] - node_r[i] - 0.5 * quad_t[q] if p >= 0 else 0.0
+        if p < 0 or gap >= 0.0 or -gap > pen_max:
+            for s in range(maxs):
+                hist_partner[i, s] = -1
             continue
-        q = pairs[p, 1]
         nd = nodes[i]
-        gap = pd[p, 2] - node_r[i] - 0.5 * quad_t[q]
-        if gap >= 0.0 or -gap > pen_max:
-            continue
         n_active += 1
         xi = pd[p, 0]
         eta = pd[p, 1]
@@ -707,9 +771,9 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
             nv[c] = pd[p, 3 + c]
             hnew[c] = 0.0
         if k_t > 0.0:
-            slot = _find_slot(part_old, quads, i, q)
+            slot = _find_slot(hist_partner, quads, i, q)
             for c in range(3):
-                fold[c] = hist_old[i, slot, c] if slot >= 0 else 0.0
+                fold[c] = hist_ft[i, slot, c] if slot >= 0 else 0.0
                 vq = 0.0
                 for m in range(4):
                     vq += N[m] * v[quads[q, m], c]
@@ -719,6 +783,9 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
             for c in range(3):
                 dg[c] -= dgn * nv[c]
             rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew, ds)
+        for s in range(maxs):
+            hist_partner[i, s] = -1
+        if k_t > 0.0:
             hist_partner[i, 0] = q
             for c in range(3):
                 hist_ft[i, 0, c] = hnew[c]
@@ -731,6 +798,63 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
                 f_n[quads[q, m], c] -= N[m] * fnc
                 f_t[quads[q, m], c] -= N[m] * ftc
     return n_active
+
+
+@njit(cache=True)
+def _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, p0, p1, pd):
+    """Closest points of the (node, quad) pairs p0..p1-1 into pd (see node_facet_contact).
+
+    Early reject: a pair whose node is farther from the bounding box of the quad's nodes
+    (which holds the bilinear facet, so the box distance bounds |dist| from below) than
+    ``T = max(r + t_max/2, pen_max - r)`` gets pd = inf.  Any contact has
+    |dist| <= T (in front: |dist| < r + t/2; behind: |dist| + r + t/2 <= pen_max), so
+    if a node's closest facet is in contact it is not rejected and every rejected pair is
+    farther (the choice of the closest facet is unchanged), and if it is rejected no pair
+    of the node can be in contact: the result is unchanged.
+    """
+    prj = np.zeros(8)
+    for p in range(p0, p1):
+        i = pairs[p, 0]
+        q = pairs[p, 1]
+        nd = nodes[i]
+        pd[p, 2] = np.inf
+        if (quads[q, 0] == nd or quads[q, 1] == nd or quads[q, 2] == nd
+                or quads[q, 3] == nd):
+            continue
+        lim = max(node_r[i] + 0.5 * t_max, pen_max - node_r[i]) * (1.0 + REJECT_TOL)
+        d2 = 0.0
+        for c in range(3):
+            lo = min(min(x[quads[q, 0], c], x[quads[q, 1], c]),
+                     min(x[quads[q, 2], c], x[quads[q, 3], c]))
+            hi = max(max(x[quads[q, 0], c], x[quads[q, 1], c]),
+                     max(x[quads[q, 2], c], x[quads[q, 3], c]))
+            d = max(lo - x[nd, c], x[nd, c] - hi)
+            if d > 0.0:
+                d2 += d * d
+        if d2 > lim * lim:
+            continue
+        _project_quad(x, quads, q, x[nd], True, prj)
+        d0 = x[nd, 0] - prj[2]
+        d1 = x[nd, 1] - prj[3]
+        d2 = x[nd, 2] - prj[4]
+        dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        sg = quad_sign[q]
+        side = sg * (d0 * prj[5] + d1 * prj[6] + d2 * prj[7])
+        pd[p, 0] = prj[0]
+        pd[p, 1] = prj[1]
+        pd[p, 6] = prj[2]
+        pd[p, 7] = prj[3]
+        pd[p, 8] = prj[4]
+        if side >= 0.0 and dist > 1e-12:
+            pd[p, 2] = dist
+            pd[p, 3] = d0 / dist
+            pd[p, 4] = d1 / dist
+            pd[p, 5] = d2 / dist
+        else:                    # behind the mid-surface: push out along the normal
+            pd[p, 2] = -dist
+            pd[p, 3] = sg * prj[5]
+            pd[p, 4] = sg * prj[6]
+            pd[p, 5] = sg * prj[7]
 
 
 # ------------------------------------------------------------------ (d) cohesive ties
