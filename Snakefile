@@ -30,6 +30,7 @@ include: "workflow/rules/data.smk"
 include: "workflow/rules/tensile.smk"
 include: "workflow/rules/rom.smk"
 include: "workflow/rules/branch.smk"
+include: "workflow/rules/hifi.smk"
 include: "workflow/rules/report.smk"
 
 

@@ -70,6 +70,39 @@ def register(sub) -> None:
     p.add_argument("--out", type=Path, required=True)
     p.set_defaults(func=_table3)
 
+    p = ssub.add_parser("hifi-run", help="one hi-fi virtual three-point test of a case (Sec. 4.1)")
+    p.add_argument("--case", required=True)
+    p.add_argument("--settings", type=_settings, required=True)
+    p.add_argument("--outdir", type=Path, required=True)
+    p.add_argument("--coverings", type=Path, default=None, help="table2.csv (default: the paper's Table 2)")
+    p.add_argument("--interface", type=Path, default=None,
+                   help="fit.json of a chain step whose interface replaces the settings' values")
+    p.add_argument("--reference", type=Path, default=None, help="prepared test (HDF5) to compare with")
+    p.add_argument("--role", default="virtual", help="crosscheck | validation | virtual (report)")
+    p.set_defaults(func=_hifi_run)
+
+    p = ssub.add_parser("hifi-fit", help="one step of the hi-fi interface calibration (Sec. 4.2)")
+    p.add_argument("--step", required=True)
+    p.add_argument("--settings", type=_settings, required=True)
+    p.add_argument("--reference", nargs="+", required=True, metavar="CASE=H5",
+                   help="prepared test of every case of the step")
+    p.add_argument("--coverings", type=Path, default=None, help="table2.csv of the tensile stage")
+    p.add_argument("--prior", type=Path, nargs="*", default=[], help="fit.json of the earlier steps")
+    p.add_argument("--outdir", type=Path, required=True)
+    p.set_defaults(func=_hifi_fit)
+
+    p = ssub.add_parser("hifi-interface", help="collect the chain fits into interface.csv")
+    p.add_argument("--fits", type=Path, nargs="+", required=True)
+    p.add_argument("--out", type=Path, required=True)
+    p.set_defaults(func=_hifi_interface)
+
+    p = ssub.add_parser("hifi-rom", help="eq. 13 + simplex on a hi-fi curve (Table 3 cross-check)")
+    p.add_argument("--case", required=True)
+    p.add_argument("--curve", type=Path, required=True, help="hi-fi curve.csv (deflection_mm,force_N)")
+    p.add_argument("--settings", type=_settings, required=True)
+    p.add_argument("--outdir", type=Path, required=True)
+    p.set_defaults(func=_hifi_rom)
+
 
 def _warmup(args) -> int:
     from harnesspipe.stages.warmup import warm_up
@@ -114,4 +147,42 @@ def _table2(args) -> int:
 def _table3(args) -> int:
     from harnesspipe.stages.rom import table3
     print(table3(args.fits, args.out).to_string(index=False))
+    return 0
+
+
+def _hifi_run(args) -> int:
+    from harnesspipe.stages.hifi_chain import run_case
+    summary = run_case(args.case, args.settings, args.outdir, table2=args.coverings,
+                       interface_fit=args.interface, reference=args.reference, role=args.role)
+    print(json.dumps({k: summary.get(k) for k in ("case", "role", "wall_s", "steps", "dt", "ke_ie_max",
+                                                   "energy_error", "measured")}, indent=2))
+    return 0
+
+
+def _hifi_fit(args) -> int:
+    from harnesspipe.cli import InputError
+    from harnesspipe.stages.hifi_chain import fit_step
+    refs = {}
+    for item in args.reference:
+        case, sep, path = item.partition("=")
+        if not sep:
+            raise InputError(f"--reference {item!r}: expected CASE=PATH")
+        refs[case] = Path(path)
+    missing = [c for c in args.settings.get("cases", []) if c not in refs]
+    if missing:
+        raise InputError(f"--reference: no prepared test for {missing}")
+    fit = fit_step(args.step, args.settings, refs, args.outdir, table2=args.coverings, priors=args.prior)
+    print(json.dumps(fit, indent=2))
+    return 0
+
+
+def _hifi_interface(args) -> int:
+    from harnesspipe.stages.hifi_chain import interface_table
+    print(interface_table(args.fits, args.out).to_string(index=False))
+    return 0
+
+
+def _hifi_rom(args) -> int:
+    from harnesspipe.stages.hifi_chain import rom_crosscheck
+    print(json.dumps(rom_crosscheck(args.case, args.curve, args.settings, args.outdir), indent=2))
     return 0

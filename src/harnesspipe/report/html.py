@@ -23,6 +23,8 @@ STAGES = {  # stage -> (heading, paper table key, paper section)
     "tensile": ("Component tensile fits (Sec. 3.2, Table 2)", "table2", "Table 2"),
     "rom": ("Reduced-order beam properties (Sec. 4.3, eq. 13 + simplex, Table 3)", "table3", "Table 3"),
     "branch": ("Branching harness: break-out joint damping (Sec. 5, eqs. 14-15)", "damping", "Sec. 5"),
+    # listed from results/hifi by hifi_section (its --fits are only the rule's dependencies)
+    "hifi": ("High-fidelity model (Sec. 4.1-4.3)", "interface", "Sec. 4.2"),
 }
 
 
@@ -125,6 +127,204 @@ def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth:
     return f"<h2>{html.escape(heading)}</h2>{table}{''.join(blocks)}"
 
 
+# --------------------------------------------------------------------------- hi-fi section
+
+HIFI_INTERFACE = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1")
+HIFI_RUN_NUMBERS = ("wall_s", "steps", "dt", "ke_ie_max", "energy_error", "n_beam_elements",
+                    "n_shell_elements", "contact_pairs_max")
+
+
+def _read_json(path: Path) -> dict | None:
+    import json
+    try:
+        return json.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def _rel(value, ref) -> str:
+    try:
+        return f"{100.0 * (float(value) - float(ref)) / float(ref):+.1f} %"
+    except (TypeError, ValueError, ZeroDivisionError):
+        return ""
+
+
+def _measured_by_case(prepared: list[Path]) -> dict:
+    out = {}
+    for p in sorted(prepared):
+        try:
+            pr = read_prepared(p)
+        except (OSError, KeyError):
+            continue
+        if pr.entry.get("kind") == "three_point":
+            out.setdefault(pr.entry["item"], pr)
+    return out
+
+
+def _hifi_run_block(title: str, folder: Path, measured) -> tuple[str, dict | None]:
+    """Curve vs measured band, energies and the summary numbers of one hi-fi run."""
+    summary = _read_json(folder / "summary.json")
+    if summary is None or not (folder / "curve.csv").exists():
+        return "", None
+    curve = pd.read_csv(folder / "curve.csv")
+    figs = [_img(plots.hifi_curve_figure({"hi-fi": curve}, measured, title=title), f"hi-fi {title}")]
+    if (folder / "energies.csv").exists():
+        figs.append(_img(plots.energies_figure(pd.read_csv(folder / "energies.csv"),
+                                               title=f"{title}: energies"), f"energies {title}"))
+    if (folder / "shapes.png").exists():
+        data = base64.b64encode((folder / "shapes.png").read_bytes()).decode()
+        figs.append(f'<img alt="shapes {html.escape(title)}" src="data:image/png;base64,{data}">')
+    numbers = [[k, summary[k]] for k in HIFI_RUN_NUMBERS if k in summary]
+    m = summary.get("measured")
+    if m:
+        numbers.append([f"||e||_l2 vs {m['test_id']} [N]", m["error_l2"]])
+        numbers.append(["relative error", f"{100 * m['error_rel']:.2f} %"])
+    text = (f"<h4>{html.escape(title)}</h4>" + _table(["quantity", "value"], numbers))
+    return f'<div>{text}<div class="fit">{"".join(figs)}</div></div>', summary
+
+
+def hifi_section(results: Path, cfg: dict, prepared: list[Path]) -> str:
+    """Everything of results/hifi that exists: cross-check Table 3, the calibration chain,
+    the interface beside the paper's, the virtual tests, their energies and the cost."""
+    heading = f"<h2>{html.escape(STAGES['hifi'][0])}</h2>"
+    root = Path(results) / "hifi"
+    runs = sorted(root.glob("*/*/summary.json")) + sorted(root.glob("chain/*/*/summary.json"))
+    order = {"mu_rtb": 0, "mu_rtp": 1, "cohesive": 2, "fabric": 3}   # the chain of Sec. 4.2
+    fits = sorted(root.glob("chain/*/fit.json"), key=lambda p: (order.get(p.parent.name, 9), p.parent.name))
+    if not runs and not fits and not (root / "crosscheck" / "table3.csv").exists():
+        return (heading + "<p class='note'>No hi-fi results yet: <code>snakemake --cores 2 "
+                "hifi_crosscheck_all</code> (Table 3 at the paper's values) and <code>hifi_chain_all</code> "
+                "(the Sec. 4.2 calibration chain and the virtual tests) write them under "
+                "<code>results/hifi/</code>; hours at the default profile.</p>")
+    measured = _measured_by_case(prepared)
+    paper = cfg.get("paper", {})
+    parts = [heading, "<p class='note'>Explicit mesoscale model of the three-point test (Sec. 4.1). "
+             "The cross-check runs use the paper's Table 2 and interface values; the calibration chain "
+             "fits the interface to the measured means (Sec. 4.2) with the tensile stage's Table 2.</p>"]
+    cost_rows, n_runs, wall_total = [], 0, 0.0
+
+    # cross-check of Table 3
+    t3 = root / "crosscheck" / "table3.csv"
+    if t3.exists():
+        frame = pd.read_csv(t3)
+        rows = []
+        for r in frame.itertuples():
+            ref = paper.get("table3", {}).get(r.case, {})
+            for k in ("E", "sigma_y", "K", "n"):
+                rows.append([r.case, k, getattr(r, k), ref.get(k, ""), _rel(getattr(r, k), ref.get(k))])
+        parts.append("<h3>Table 3 from hi-fi curves at the paper's parameters</h3>"
+                     "<p>eq. 13 + simplex (the ROM stage's fit) on each hi-fi curve "
+                     "(<code>results/hifi/crosscheck/table3.csv</code>).</p>"
+                     + _table(["case", "parameter", "hi-fi + ROM fit", "paper (Table 3)", "difference"], rows))
+    figs = []
+    for fit_path in sorted(root.glob("crosscheck/*/rom/fit.json")):
+        fit = read_fit(fit_path)
+        hifi_curve = fit_path.parent.parent / "curve.csv"
+        if hifi_curve.exists():
+            figs.append(_img(plots.hifi_rom_figure(pd.read_csv(hifi_curve), pd.read_csv(fit_path.parent / "curve.csv"),
+                                                   title=f"{fit['item']}: ROM on the hi-fi curve"),
+                             f"rom crosscheck {fit['item']}"))
+    if figs:
+        parts.append('<div class="fit">' + "".join(figs) + "</div>")
+
+    # interface beside the paper's
+    iface = root / "interface.csv"
+    fitted = {}
+    if iface.exists():
+        fitted = dict(zip(*pd.read_csv(iface)[["parameter", "value"]].T.values))
+    else:
+        for p in fits:
+            fitted.update(read_fit(p)["parameters"])
+    if fitted:
+        pi, guess = paper.get("interface", {}), cfg.get("hifi", {}).get("parameters", {})
+        rows = [[k, fitted.get(k, ""), guess.get(k, ""), pi.get(k, ""), _rel(fitted.get(k), pi.get(k))]
+                for k in HIFI_INTERFACE]
+        src = "results/hifi/interface.csv" if iface.exists() else "chain fits so far (interface.csv not written yet)"
+        parts.append(f"<h3>Calibrated interface (Sec. 4.2)</h3><p>From <code>{html.escape(src)}</code>.</p>"
+                     + _table(["parameter", "calibrated", "initial guess", "paper (Sec. 4.2)", "difference"], rows))
+
+    # calibration steps
+    for p in fits:
+        fit = read_fit(p)
+        status = "" if fit.get("converged") else ' <span class="bad">(search did not converge)</span>'
+        text = (f"<h3>Calibration step {html.escape(fit['item'])}</h3><p>{html.escape(fit.get('method', ''))} "
+                f"on {html.escape(', '.join(fit.get('cases', [])))}, deflection window "
+                f"{fit.get('window')} mm: ||e||<sub>l2</sub> = {fit['error_l2']:.4g} N (relative "
+                f"{100 * fit['error_rel']:.2f} %), {fit['nfev']} evaluations, {fit.get('rejected', 0)} rejected, "
+                f"{fit.get('hifi_wall_s', 0.0) / 60:.1f} min of hi-fi runs.{status}</p>"
+                + _table(["", *fit["parameters"]], [["fitted", *fit["parameters"].values()],
+                                                     ["paper", *[paper.get("interface", {}).get(k, "")
+                                                                 for k in fit["parameters"]]]]))
+        figs = []
+        curve = pd.read_csv(p.parent / "curve.csv")
+        preps = {c: measured[c] for c in fit.get("cases", []) if c in measured}
+        if preps:
+            figs.append(_img(plots.hifi_cases_figure(preps, {c: g for c, g in curve.groupby("case")},
+                                                     title=f"step {fit['item']}", window=fit.get("window")),
+                             f"chain {fit['item']}"))
+        trace = _load_trace(p.parent / "trace.h5")
+        if trace is not None and len(trace):
+            figs.append(_img(plots.trace_figure(trace, title=f"{fit['item']}: optimiser trace"),
+                             f"trace {fit['item']}"))
+        rejected = []
+        if (p.parent / "rejected.jsonl").exists():
+            for line in (p.parent / "rejected.jsonl").read_text().splitlines()[:10]:
+                r = _read_json_line(line)
+                if r:
+                    rejected.append([r.get("case") or "", ", ".join(f"{k}={v:.4g}" for k, v in r["parameters"].items()
+                                                                    if k in fit["parameters"]), r.get("reason", "")])
+        rej = _table(["case", "parameters", "reason"], rejected) if rejected else ""
+        parts.append(f'<div>{text}{rej}<div class="fit">{"".join(figs)}</div></div>')
+        n = int(fit.get("hifi_runs", fit["nfev"]))
+        n_runs += n
+        wall_total += float(fit.get("hifi_wall_s", 0.0))
+        cost_rows.append([f"fit {fit['item']}", n, float(fit.get("hifi_wall_s", 0.0)) / max(n, 1),
+                          float(fit.get("hifi_wall_s", 0.0)) / 60.0])
+
+    # single runs: cross-check, virtual tests, best points of the fits
+    blocks = {"crosscheck": [], "virtual": [], "chain": []}
+    for path in runs:
+        folder = path.parent
+        group = folder.parent.name if folder.parent.parent == root else "chain"
+        case = folder.name
+        title = {"crosscheck": f"cross-check {case} (paper's values)", "virtual": f"virtual test {case}",
+                 "chain": f"fit {folder.parent.name}: {case} at the best point"}[group]
+        block, summary = _hifi_run_block(title, folder, measured.get(case))
+        if not block:
+            continue
+        if summary.get("role"):
+            block = block.replace("</h4>", f" <span class='note'>({html.escape(summary['role'])})</span></h4>", 1)
+        blocks[group].append(block)
+        if group != "chain":
+            n_runs += 1
+            wall_total += float(summary.get("wall_s", 0.0))
+            cost_rows.append([title, 1, float(summary.get("wall_s", 0.0)), float(summary.get("wall_s", 0.0)) / 60.0])
+    for group, head in (("virtual", "Virtual tests at the calibrated interface"),
+                        ("crosscheck", "Cross-check runs at the paper's parameters"),
+                        ("chain", "Calibration runs at the best points")):
+        if blocks[group]:
+            parts.append(f"<h3>{head}</h3>" + "".join(blocks[group]))
+
+    # cost
+    cost = paper.get("cost", {})
+    if cost_rows:
+        cost_rows.append(["total", n_runs, wall_total / max(n_runs, 1), wall_total / 60.0])
+        paper_line = (f"Paper (Sec. 4.3): one hi-fi run {cost.get('hifi_wall_min', '?')} min on "
+                      f"{cost.get('hifi_cores', '?')} cores (= {float(cost.get('hifi_wall_min', 0)) * float(cost.get('hifi_cores', 0)) / 60:.0f} "
+                      f"core-hours); here each run uses one core.") if cost else ""
+        parts.append("<h3>Cost</h3><p>" + html.escape(paper_line) + "</p>"
+                     + _table(["item", "hi-fi runs", "wall per run [s]", "wall total [min]"], cost_rows))
+    return "".join(parts)
+
+
+def _read_json_line(line: str) -> dict | None:
+    import json
+    try:
+        return json.loads(line)
+    except ValueError:
+        return None
+
+
 def build(out: Path, *, cfg: dict, results: Path, check_summary: Path,
           prepared: list[Path], fits: dict[str, list[Path]]) -> Path:
     """Write the report to ``out`` (atomically) and return its path."""
@@ -134,7 +334,9 @@ def build(out: Path, *, cfg: dict, results: Path, check_summary: Path,
              f"profile <b>{html.escape(cfg['profile'])}</b>. Units mm, N, MPa.</p>",
              data_section(Path(check_summary).read_text().strip(), prepared, truth)]
     for stage in STAGES:
-        if fits.get(stage):
+        if stage == "hifi":
+            parts.append(hifi_section(results, cfg, prepared))
+        elif fits.get(stage):
             parts.append(stage_section(stage, fits[stage], results, cfg, truth))
     page = ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
             "<title>harnesspipe report</title><style>" + CSS + "</style></head><body>"

@@ -80,3 +80,88 @@ def shape_figure(prepared, shapes, title=""):
     ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
     return fig
+
+
+# --------------------------------------------------------------------------- hi-fi section
+
+def _band(ax, prepared):
+    ax.fill_between(prepared.grid, prepared.lo, prepared.hi, color="0.85", label="measured (min/max)")
+    ax.plot(prepared.grid, prepared.mean, color="k", lw=1.4, label="measured mean")
+
+
+def hifi_curve_figure(curves: dict, prepared=None, title="", window=None):
+    """Hi-fi force-deflection curves (label -> DataFrame deflection_mm/displacement_mm, force_N)
+    over the measured band when there is a test."""
+    fig, ax = plt.subplots(figsize=(5.2, 3.6), dpi=110)
+    if prepared is not None:
+        _band(ax, prepared)
+    styles = ["--", "-.", ":", "-"]
+    for k, (label, c) in enumerate(curves.items()):
+        x = c["deflection_mm"] if "deflection_mm" in c else c["displacement_mm"]
+        ax.plot(x, c["force_N"], lw=1.6, ls=styles[k % len(styles)], label=label)
+    if window is not None:
+        ax.axvspan(window[0], window[1], color="tab:orange", alpha=0.08, label="fitted window")
+    ax.set_xlabel("deflection [mm]")
+    ax.set_ylabel("force [N]")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    return fig
+
+
+def hifi_cases_figure(prepared: dict, curves: dict, title="", window=None):
+    """One panel per case of a calibration step: band, mean and the hi-fi curve at the best point."""
+    n = max(len(prepared), 1)
+    fig, axes = plt.subplots(1, n, figsize=(5.0 * n, 3.6), dpi=110, squeeze=False)
+    for ax, (case, pr) in zip(axes[0], prepared.items()):
+        _band(ax, pr)
+        c = curves.get(case)
+        if c is not None:
+            x = c["deflection_mm"] if "deflection_mm" in c else c["displacement_mm"]
+            ax.plot(x, c["force_N"], color="tab:red", lw=1.6, ls="--", label="hi-fi (best point)")
+        if window is not None:
+            ax.axvspan(window[0], window[1], color="tab:orange", alpha=0.08, label="fitted window")
+        ax.set_xlabel("deflection [mm]")
+        ax.set_ylabel("force [N]")
+        ax.set_title(f"{title}: {case}", fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="best")
+    fig.tight_layout()
+    return fig
+
+
+def hifi_rom_figure(hifi, rom, title=""):
+    """A hi-fi curve and the ROM fitted to it (eq. 13 + simplex)."""
+    fig, ax = plt.subplots(figsize=(5.2, 3.6), dpi=110)
+    ax.plot(hifi["deflection_mm"], hifi["force_N"], color="k", lw=1.4, label="hi-fi (paper's parameters)")
+    ax.plot(rom["displacement_mm"], rom["force_N"], color="tab:red", lw=1.6, ls="--", label="ROM (fitted)")
+    ax.set_xlabel("deflection [mm]")
+    ax.set_ylabel("force [N]")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+ENERGY_COLUMNS = (("KE", "kinetic"), ("internal", "internal"), ("friction", "friction (wires)"),
+                  ("pin_friction", "friction (rollers)"), ("cohesive", "cohesive"),
+                  ("contact", "contact"), ("damping", "damping"), ("W_ext", "external work"))
+
+
+def energies_figure(history, title=""):
+    """Energy families of a hi-fi run against the feeder deflection (or time)."""
+    fig, ax = plt.subplots(figsize=(5.2, 3.6), dpi=110)
+    x = history["deflection_mm"] if "deflection_mm" in history else history["time_s"]
+    for col, label in ENERGY_COLUMNS:
+        if col in history and (col in ("KE", "internal", "W_ext") or np.any(np.abs(history[col]) > 0)):
+            ax.plot(x, history[col], lw=1.8 if col == "W_ext" else 1.2,
+                    ls="--" if col == "W_ext" else "-", label=label)
+    ax.set_xlabel("deflection [mm]" if "deflection_mm" in history else "time [s]")
+    ax.set_ylabel("energy [N mm]")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    return fig

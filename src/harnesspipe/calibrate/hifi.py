@@ -1,0 +1,168 @@
+"""Calibration of the hi-fi interface parameters (Sec. 4.2): objectives and searches.
+
+Each fit compares the hi-fi force-deflection curve with the measured mean on a
+deflection window (Sec. 4.2.1: friction on u < 20 mm, cohesive on u > 20 mm) by the
+l2 norm of eq. 4 on the measurement grid.  One parameter is found by a bounded 1-D
+search (Brent's bounded method, ``scipy.optimize.minimize_scalar``), several by the
+paper's Nelder-Mead (:func:`harnesspipe.calibrate.simplex.nelder_mead`).
+
+Robustness.  A hi-fi run that fails -- unstable, energy balance lost, KE/IE above
+its limit -- is a *rejected point*: its parameters and reason go to the log and the
+objective returns the penalty ``REJECT_FACTOR x ||F_exp||`` (finite, so that Brent's
+parabolic steps stay defined; a curve that matches nothing scores at most
+``||F_exp||``, so the penalty is always worse than any successful run).  Every
+evaluation is appended to an HDF5 log as it happens; a rerun after an interruption
+replays the logged evaluations instead of recomputing them.
+"""
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from harnesspipe.calibrate.objective import l2_error, on_grid
+from harnesspipe.calibrate.simplex import EvaluationLog, FitResult, nelder_mead
+
+REJECT_FACTOR = 10.0
+#: a simulated curve may end this fraction of the window's end short of it (the feeder stops
+#: at the stroke; the output sampling can leave the last point a hair below the measured end)
+END_TOLERANCE = 0.01
+
+
+class RejectedRun(RuntimeError):
+    """A hi-fi evaluation that did not produce a valid curve."""
+
+
+def window_mask(u_grid, window) -> np.ndarray:
+    lo, hi = window
+    return (u_grid >= lo) & (u_grid <= hi)
+
+
+def curve_error(u_sim, f_sim, u_grid, f_exp, window) -> float:
+    """eq. 4 on the grid points of the deflection window.
+
+    Grid points beyond the simulated range by more than ``END_TOLERANCE`` of the
+    window's end make the run a rejected point; closer ones take the end value.
+    """
+    u_sim, f_sim = np.asarray(u_sim, dtype=float), np.asarray(f_sim, dtype=float)
+    if u_sim.size < 2 or not np.all(np.isfinite(f_sim)):
+        raise RejectedRun("simulated curve is empty or not finite")
+    order = np.argsort(u_sim, kind="stable")
+    u_sim, f_sim = u_sim[order], f_sim[order]
+    mask = window_mask(u_grid, window)
+    u = u_grid[mask]
+    tol = END_TOLERANCE * max(abs(float(window[1])), 1e-12)
+    if u.size == 0:
+        raise RejectedRun(f"no measured point in the window {tuple(window)}")
+    if u.min() < u_sim[0] - tol or u.max() > u_sim[-1] + tol:
+        raise RejectedRun(f"simulated curve ({u_sim[0]:.4g}..{u_sim[-1]:.4g} mm) does not cover "
+                          f"the window {tuple(window)}")
+    f = on_grid(u_sim, f_sim, np.clip(u, u_sim[0], u_sim[-1]))
+    return l2_error(f_exp[mask], f)
+
+
+def admissible(params: dict) -> str | None:
+    """Why a parameter set cannot be simulated (None if it can): negative friction or
+    cohesive values, or a damage onset not below the failure separation (eqs. 8-10)."""
+    for k in ("mu_rtb", "mu_rtp", "alpha_d", "E2_over_E1"):
+        if k in params and not params[k] >= 0.0:
+            return f"{k} = {params[k]:.6g} < 0"
+    for k in ("delta0", "delta_f"):
+        if k in params and not params[k] > 0.0:
+            return f"{k} = {params[k]:.6g} <= 0"
+    if "delta0" in params and "delta_f" in params and not params["delta_f"] > params["delta0"]:
+        return f"delta_f = {params['delta_f']:.6g} <= delta0 = {params['delta0']:.6g}"
+    return None
+
+
+class HifiObjective:
+    """``error(params)`` of one or more hi-fi runs against measured means.
+
+    ``simulate(case, params) -> (u, F)``; ``targets``: list of (case, u_grid, F_mean, window);
+    the error is the sum over targets.  A failed run (``RuntimeError`` -- which includes
+    the explicit solver's ``ExplicitError`` -- or ``ArithmeticError``) or an inadmissible
+    parameter set (:func:`admissible`) is a rejected point: it scores ``penalty`` and is
+    appended to ``rejected_log`` (JSON lines: case, parameters, reason, ``key``).
+    ``n_runs`` counts the simulate calls of this process, ``n_rejected`` the rejections.
+    """
+
+    def __init__(self, simulate, targets, fixed: dict, names: list[str],
+                 rejected_log: Path | None = None, key: str = ""):
+        self.simulate, self.targets, self.fixed, self.names = simulate, targets, dict(fixed), list(names)
+        self.rejected_log = Path(rejected_log) if rejected_log else None
+        self.key = key
+        self.penalty = REJECT_FACTOR * sum(
+            float(np.linalg.norm(F[window_mask(u, w)])) for _, u, F, w in targets)
+        self.n_runs = 0
+        self.n_rejected = 0
+
+    def params(self, x) -> dict:
+        return {**self.fixed, **{k: float(v) for k, v in zip(self.names, np.atleast_1d(x))}}
+
+    def __call__(self, x) -> float:
+        p = self.params(x)
+        why = admissible(p)
+        if why is not None:
+            self._reject(None, p, RejectedRun(f"inadmissible: {why}"))
+            return self.penalty
+        total = 0.0
+        for case, u_grid, f_exp, window in self.targets:
+            try:
+                self.n_runs += 1
+                u, F = self.simulate(case, p)
+                total += curve_error(u, F, u_grid, f_exp, window)
+            except (RuntimeError, ArithmeticError) as exc:  # RejectedRun, ExplicitError, ...
+                self._reject(case, p, exc)
+                return self.penalty
+        return total
+
+    def _reject(self, case, p, exc) -> None:
+        self.n_rejected += 1
+        if self.rejected_log is None:
+            return
+        self.rejected_log.parent.mkdir(parents=True, exist_ok=True)
+        with open(self.rejected_log, "a") as f:
+            f.write(json.dumps({"case": case, "parameters": p, "key": self.key,
+                                "reason": f"{type(exc).__name__}: {exc}"}) + "\n")
+
+
+def read_rejected(path: Path, key: str | None = None) -> list[dict]:
+    """Rejected points of a log (only those written under ``key`` when given)."""
+    path = Path(path)
+    if not path.exists():
+        return []
+    rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    return [r for r in rows if key is None or r.get("key", "") == key]
+
+
+def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, key="",
+                maxfev: int = 30) -> FitResult:
+    """Brent's bounded search for one parameter, every evaluation logged (and replayed)."""
+    log = EvaluationLog(log_path, [name], key)
+
+    def wrapped(c):
+        x = np.array([c], dtype=float)
+        hit = log.lookup(x)
+        if hit is not None:
+            log.append(x, hit[1], hit[2])
+            return hit[1]
+        t0 = time.perf_counter()
+        err = float(objective(x))
+        log.append(x, err, time.perf_counter() - t0)
+        return err
+
+    res = minimize_scalar(wrapped, bounds=tuple(bounds), method="bounded",
+                          options={"xatol": xatol, "maxiter": maxfev})
+    return FitResult(names=[name], x=np.array([res.x]), fun=float(res.fun), nfev=len(log.rows),
+                     converged=bool(res.success), message=str(res.message), trace=log.frame())
+
+
+def simplex_fit(objective, x0: dict, *, xatol: float, fatol: float, maxfev: int, log_path=None,
+                key="") -> FitResult:
+    """The paper's Nelder-Mead (+5 % simplex) on several parameters."""
+    names = list(x0)
+    return nelder_mead(objective, np.array([x0[k] for k in names]), names, xatol=xatol,
+                       fatol=fatol, maxfev=maxfev, log_path=log_path, key=key)

@@ -1,0 +1,293 @@
+"""Hi-fi pipeline stages (DESIGN stages 3-7 on the mesoscale model; rules in workflow/rules/hifi.smk).
+
+* :func:`run_case` -- one virtual three-point test (cross-check at the paper's values,
+  or at the calibrated interface) with its artefacts: ``curve.csv``
+  (``deflection_mm,force_N``), ``summary.json``, ``energies.csv``, ``slip_out.csv``,
+  ``shapes/`` and ``shapes.png``; against a measured test also its error (eq. 4).
+* :func:`fit_step` -- one step of the calibration chain of Sec. 4.2: a bounded 1-D
+  search (one parameter) or the paper's Nelder-Mead (several) of the interface on
+  the measured means of one or two CWBs in a deflection window.  Writes
+  ``fit.json``, ``curve.csv`` (``case,displacement_mm,force_N`` at the best point),
+  ``trace.h5`` (every evaluation), ``rejected.jsonl`` (failed runs, parameters and
+  reason), ``fit.png`` and per case ``<case>/summary.json`` and ``energies.csv``.
+  The live evaluation log is ``replay/evaluations.h5`` -- not a Snakemake output, so
+  it survives an interrupted or failed job and the rerun replays it.
+* :func:`rom_crosscheck` -- eq. 13 + simplex (exactly the ROM stage's
+  :func:`harnesspipe.calibrate.rom.fit`) on a hi-fi curve instead of a measured mean.
+* :func:`interface_table` -- ``results/hifi/interface.csv`` (``parameter,value``).
+
+``settings`` (JSON built by the rules) carries ``model``: the part of the config a
+hi-fi run of the case reads (see ``hifi_model`` in hifi.smk: so that an unrelated
+config change reruns nothing) and ``set``: extra ``--set``-style overrides.  The
+hi-fi model itself is reached through ``runner(model_cfg, case, interface, table2)
+-> HifiRun``; tests pass a cheap fake.
+"""
+from __future__ import annotations
+
+import copy
+import json
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from harnesspipe.calibrate import hifi as hcal
+from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
+from harnesspipe.config import ConfigError
+from harnesspipe.stages.common import read_fit, write_csv, write_fit, write_json
+
+INTERFACE = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1")
+#: interface values a run needs but a case does not use: E2/E1 acts on fabric coverings only
+NEUTRAL = {"E2_over_E1": 1.0}
+N_GRID = 101   # points of the deflection grid a hi-fi curve is resampled to for eq. 13 (as prepare_test)
+
+
+# --------------------------------------------------------------------------- running the model
+
+def model_config(settings: dict, interface: dict) -> dict:
+    """The config dict :func:`harnesspipe.stages.hifi.inputs` reads, with ``interface`` as the
+    run's interface parameters."""
+    cfg = copy.deepcopy(settings["model"])
+    cfg.setdefault("hifi", {})["parameters"] = {**NEUTRAL, **interface}
+    return cfg
+
+
+def default_runner(cfg: dict, case: str, overrides: dict, table2: Path | None):
+    """The real hi-fi model: :func:`harnesspipe.models.hifi.three_point`."""
+    from harnesspipe.models.hifi import three_point
+    from harnesspipe.stages.hifi import inputs
+    return three_point(inputs(cfg, case, {k: str(v) for k, v in overrides.items()}, table2))
+
+
+def _run(settings, case, interface, table2, runner):
+    cfg = model_config(settings, interface)
+    return (runner or default_runner)(cfg, case, dict(settings.get("set", {})), table2)
+
+
+def write_run(run, outdir: Path, summary: dict) -> None:
+    """Artefacts of one run (energies, slip-out, shapes when the run has a mesh, curve, summary);
+    the curve and summary last, so a failure leaves no valid-looking result."""
+    outdir = Path(outdir)
+    write_csv(outdir / "energies.csv", run.history)
+    if getattr(run, "slip_out", None) is not None:
+        write_csv(outdir / "slip_out.csv", run.slip_out)
+    if getattr(run, "mesh", None) is not None and getattr(run, "shapes", None):
+        from harnesspipe.stages.hifi import write_shapes
+        write_shapes(outdir, run)
+    write_csv(outdir / "curve.csv", run.curve[["deflection_mm", "force_N"]])
+    write_json(outdir / "summary.json", summary)
+
+
+def curve_vs_measured(curve: pd.DataFrame, prepared) -> dict:
+    """eq. 4 of a hi-fi curve against a measured mean, on the measured grid points it covers."""
+    u, F = curve["deflection_mm"].to_numpy(float), curve["force_N"].to_numpy(float)
+    order = np.argsort(u, kind="stable")
+    u, F = u[order], F[order]
+    grid = prepared.grid
+    mask = (grid >= u[0]) & (grid <= u[-1] + hcal.END_TOLERANCE * max(grid.max(), 1e-12))
+    f = np.interp(grid[mask], u, F)
+    return {"test_id": prepared.test_id, "error_l2": l2_error(prepared.mean[mask], f),
+            "error_rel": relative_l2_error(prepared.mean[mask], f),
+            "coverage_mm": [float(grid[mask].min()), float(grid[mask].max())] if mask.any() else None}
+
+
+def run_case(case: str, settings: dict, outdir: Path, *, table2: Path | None = None,
+             interface_fit: Path | None = None, reference: Path | None = None,
+             role: str = "virtual", runner=None) -> dict:
+    """One virtual test at ``settings["interface"]`` updated by the ``interface`` of a chain
+    fit (``interface_fit``); writes the run's artefacts to ``outdir``; returns the summary."""
+    interface = dict(settings.get("interface", {}))
+    source = "settings"
+    if interface_fit is not None:
+        interface.update(read_fit(interface_fit)["interface"])
+        source = str(interface_fit)
+    run = _run(settings, case, interface, table2, runner)
+    summary = {"case": case, "role": role, "interface_source": source,
+               "coverings_source": str(table2) if table2 else "paper (config paper.table2)",
+               **run.summary, "interface": {**NEUTRAL, **interface}, "set": settings.get("set", {})}
+    if reference is not None:
+        from harnesspipe.stages.data import read_prepared
+        summary["measured"] = curve_vs_measured(run.curve, read_prepared(reference))
+    write_run(run, outdir, summary)
+    return summary
+
+
+# --------------------------------------------------------------------------- calibration chain
+
+def _live_rejected(path: Path, key: str) -> None:
+    """Keep only the rejected points of this objective (another key: a stale log)."""
+    rows = hcal.read_rejected(path, key)
+    if path.exists():
+        path.write_text("".join(json.dumps(r) + "\n" for r in rows))
+
+
+def _copy_atomic(src: Path, dst: Path) -> None:
+    tmp = dst.with_name(dst.name + ".tmp")
+    if src.exists():
+        shutil.copyfile(src, tmp)
+    else:
+        tmp.write_text("")
+    tmp.replace(dst)
+
+
+def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Path, *,
+             table2: Path | None = None, priors: list[Path] = (), runner=None) -> dict:
+    """One calibration step (see module docstring).
+
+    ``settings``: ``names`` (fitted parameters), ``cases``, ``window`` ([lo, hi] mm),
+    ``method`` (``bounded`` | ``simplex``), ``bounds`` (bounded), ``xatol``, ``fatol``
+    (simplex), ``maxfev``, ``start`` (interface values before this step: the config's
+    initial guesses), ``models`` (case -> model config), ``set``.  ``priors``: fit.json
+    of the earlier steps, whose fitted parameters replace the start values.
+    """
+    from harnesspipe.report import plots
+    from harnesspipe.stages.data import read_prepared
+    outdir = Path(outdir)
+    live = outdir / "replay"
+    live.mkdir(parents=True, exist_ok=True)
+    names, cases = list(settings["names"]), list(settings["cases"])
+    fixed = dict(settings["start"])
+    prior_ids = []
+    for p in priors:
+        prior = read_fit(p)
+        fixed.update(prior["parameters"])
+        prior_ids.append({"step": prior["item"], "parameters": prior["parameters"]})
+    missing = [k for k in names if k not in fixed] if settings["method"] == "simplex" else []
+    if missing:
+        raise ConfigError(f"hifi fit {step}: no start value for {missing}")
+    refs = {c: read_prepared(references[c]) for c in cases}
+    window = tuple(float(w) for w in settings["window"])
+    targets = [(c, refs[c].grid, refs[c].mean, window) for c in cases]
+    coverings_text = Path(table2).read_text() if table2 else "paper"
+    key = objective_key(np.concatenate([refs[c].grid for c in cases]),
+                        np.concatenate([refs[c].mean for c in cases]),
+                        {"step": step, "settings": settings, "fixed": fixed, "coverings": coverings_text})
+
+    runs: dict = {}
+
+    def simulate(case, params):
+        run = _run({**settings, "model": settings["models"][case]}, case, params, table2, runner)
+        runs[(case, _pkey(params))] = run
+        return run.curve["deflection_mm"].to_numpy(float), run.curve["force_N"].to_numpy(float)
+
+    rejected_live = live / "rejected.jsonl"
+    _live_rejected(rejected_live, key)
+    objective = hcal.HifiObjective(simulate, targets, fixed, names, rejected_log=rejected_live, key=key)
+    t0 = time.perf_counter()
+    if settings["method"] == "bounded":
+        if len(names) != 1:
+            raise ConfigError(f"hifi fit {step}: a bounded search fits one parameter, not {names}")
+        res = hcal.bounded_fit(objective, names[0], settings["bounds"], xatol=settings["xatol"],
+                               log_path=live / "evaluations.h5", key=key, maxfev=settings["maxfev"])
+    elif settings["method"] == "simplex":
+        res = hcal.simplex_fit(objective, {k: fixed[k] for k in names}, xatol=settings["xatol"],
+                               fatol=settings["fatol"], maxfev=settings["maxfev"],
+                               log_path=live / "evaluations.h5", key=key)
+    else:
+        raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex")
+    best = objective.params(res.x)
+    if not np.isfinite(res.fun) or res.fun >= objective.penalty:
+        raise hcal.RejectedRun(f"hifi fit {step}: every evaluation was rejected "
+                               f"(see {rejected_live})")
+    # the best point's runs: kept from this process, else (replayed evaluations) run again
+    curves, per_case, reruns = [], {}, 0
+    for case in cases:
+        run = runs.get((case, _pkey(best)))
+        if run is None:
+            reruns += 1
+            run = _run({**settings, "model": settings["models"][case]}, case, best, table2, runner)
+        err = hcal.curve_error(run.curve["deflection_mm"], run.curve["force_N"], refs[case].grid,
+                               refs[case].mean, window)
+        per_case[case] = {"test_id": refs[case].test_id, "error_l2_window": err,
+                          "measured": curve_vs_measured(run.curve, refs[case])}
+        write_run(run, outdir / case, {"case": case, "role": f"calibration ({step})", **run.summary,
+                                       "interface": {**NEUTRAL, **best}, "set": settings.get("set", {})})
+        c = run.curve.rename(columns={"deflection_mm": "displacement_mm"})[["displacement_mm", "force_N"]]
+        curves.append(c.assign(case=case)[["case", "displacement_mm", "force_N"]])
+    curve = pd.concat(curves, ignore_index=True)
+    _copy_atomic(live / "evaluations.h5", outdir / "trace.h5")
+    _copy_atomic(rejected_live, outdir / "rejected.jsonl")
+    norm = sum(float(np.linalg.norm(F[hcal.window_mask(u, w)])) for _, u, F, w in targets)
+    trace = res.trace
+    path = write_fit(
+        outdir, stage="hifi", item=step, test_id=",".join(refs[c].test_id for c in cases),
+        parameters={k: best[k] for k in names}, error_l2=res.fun, error_rel=res.fun / max(norm, 1e-300),
+        nfev=res.nfev, converged=res.converged, wall_s=time.perf_counter() - t0, curve=curve,
+        extra={"role": "calibration", "method": settings["method"], "cases": cases, "window": list(window),
+               "bounds": settings.get("bounds"), "interface": {**NEUTRAL, **best}, "priors": prior_ids,
+               "per_case": per_case, "message": res.message,
+               "hifi_runs": int(len(trace) * len(cases) + reruns),   # upper bound: a rejection stops early
+               "hifi_runs_this_process": int(objective.n_runs + reruns),
+               "hifi_wall_s": float(np.nansum(trace["wall_s"])) if len(trace) else 0.0,
+               "rejected": len(hcal.read_rejected(rejected_live, key)),
+               "set": settings.get("set", {})})
+    plots.save(plots.hifi_cases_figure({c: refs[c] for c in cases},
+                                       {c: g for c, g in curve.groupby("case")},
+                                       title=f"hi-fi fit {step}", window=window), outdir / "fit.png")
+    return read_fit(path)
+
+
+def _pkey(params: dict) -> tuple:
+    return tuple(sorted((k, float(v)) for k, v in params.items()))
+
+
+def interface_table(fit_paths: list[Path], out_csv: Path) -> pd.DataFrame:
+    """results/hifi/interface.csv: ``parameter,value`` for the six interface parameters
+    (DESIGN sec. 5), each from the fit that calibrated it."""
+    values = {}
+    for p in fit_paths:
+        values.update(read_fit(p)["parameters"])
+    missing = [k for k in INTERFACE if k not in values]
+    if missing:
+        raise ConfigError(f"interface table: no fit gives {missing}")
+    frame = pd.DataFrame({"parameter": list(INTERFACE), "value": [float(values[k]) for k in INTERFACE]})
+    write_csv(out_csv, frame)
+    return frame
+
+
+# --------------------------------------------------------------------------- ROM cross-check
+
+def _rom_fit(u, F, settings, log_path):
+    from harnesspipe.calibrate import rom as rom_fit
+    return rom_fit.fit(u, F, settings, log_path=log_path)
+
+
+def _rom_simulate(params, settings):
+    from harnesspipe.calibrate import rom as rom_fit
+    return rom_fit.simulate(params, settings)
+
+
+def resample(curve: pd.DataFrame, deflection: float, n: int = N_GRID) -> tuple[np.ndarray, np.ndarray]:
+    """A hi-fi curve on the uniform grid 0..deflection (as the prepared tests)."""
+    u, F = curve["deflection_mm"].to_numpy(float), curve["force_N"].to_numpy(float)
+    order = np.argsort(u, kind="stable")
+    u, F = u[order], F[order]
+    if u[-1] < (1.0 - hcal.END_TOLERANCE) * deflection:
+        raise RuntimeError(f"hi-fi curve ends at {u[-1]:.4g} mm, short of the {deflection:g} mm test")
+    grid = np.linspace(0.0, deflection, n)
+    return grid, np.interp(grid, u, F)
+
+
+def rom_crosscheck(case: str, curve_csv: Path, settings: dict, outdir: Path) -> dict:
+    """eq. 13 + simplex on the hi-fi curve of ``case``: fit.json, curve.csv, trace.h5, fit.png."""
+    from harnesspipe.report import plots
+    outdir = Path(outdir)
+    hifi = pd.read_csv(curve_csv)
+    grid, F = resample(hifi, settings["three_point"]["deflection"])
+    t0 = time.perf_counter()
+    result = _rom_fit(grid, F, settings, outdir / "trace.h5")
+    curve = _rom_simulate(result.parameters, settings).rename(columns={"deflection_mm": "displacement_mm"})
+    F_fit = np.interp(grid, curve["displacement_mm"], curve["force_N"])
+    path = write_fit(outdir, stage="hifi_rom", item=case, test_id=f"hifi:{case}",
+                     parameters={k: result.parameters[k] for k in ("E", "sigma_y", "K", "n")},
+                     error_l2=l2_error(F, F_fit), error_rel=relative_l2_error(F, F_fit),
+                     nfev=result.result.nfev, converged=result.result.converged,
+                     wall_s=time.perf_counter() - t0, curve=curve,
+                     extra={"E_eq13": result.E_eq13, "sigma_y_eq13": result.sigma_y_eq13,
+                            "reference": "hifi", "hifi_curve": str(curve_csv),
+                            "fitted": list(settings["rom"]["simplex_parameters"])})
+    plots.save(plots.hifi_rom_figure(hifi, curve, title=f"{case}: ROM on the hi-fi curve"),
+               outdir / "fit.png")
+    return read_fit(path)

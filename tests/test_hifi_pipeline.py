@@ -1,0 +1,415 @@
+"""The hi-fi pipeline without the hi-fi model: calibration helpers, chain stages and rules.
+
+A cheap analytic stand-in replaces the explicit model (a real run takes minutes); the
+rules are checked by Snakemake itself in a temporary copy of the project where the
+stand-in is patched in (so every hifi rule really runs, in seconds).
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+import textwrap
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pandas as pd
+import pytest
+
+from conftest import REPO, copy_project
+from harnesspipe.calibrate import hifi as hcal
+from harnesspipe.stages import hifi_chain
+
+# --------------------------------------------------------------------------- the stand-in model
+
+FAKE_MODEL = '''
+import numpy as np
+import pandas as pd
+from dataclasses import dataclass, field
+
+TRUTH = {"mu_rtb": 0.3, "mu_rtp": 0.1, "delta0": 0.03, "delta_f": 0.08, "alpha_d": 2.0, "E2_over_E1": 0.6}
+
+
+@dataclass
+class FakeRun:
+    curve: pd.DataFrame
+    history: pd.DataFrame
+    slip_out: pd.DataFrame = None
+    shapes: dict = field(default_factory=dict)
+    summary: dict = field(default_factory=dict)
+    mesh: object = None
+
+
+def force(u, p, covering):
+    """Analytic bending curve: friction scales the low part, cohesion the high part."""
+    k = 1.0 + 2.0 * p.get("mu_rtb", 0.2) + 3.0 * p.get("mu_rtp", 0.2)
+    if covering == "fabric_tube":
+        k *= 0.5 + p.get("E2_over_E1", 1.0)
+    soft = p.get("delta0", 0.05) * 10.0 + p.get("delta_f", 0.1) * 5.0 + 0.05 * p.get("alpha_d", 1.0)
+    return k * u - soft * np.maximum(u - 20.0, 0.0) ** 1.5
+
+
+def run(cfg, case, interface, overrides=None):
+    if interface.get("mu_rtb", 0.0) > 0.36:
+        raise RuntimeError("explicit run stopped: fake instability")
+    covering = cfg["cases"][case]["covering"]
+    u = np.linspace(0.0, 30.0, 121)
+    F = force(u, interface, covering)
+    t = u / 30.0
+    hist = pd.DataFrame({"time_s": t, "KE": 1e-3 * F, "internal": 0.5 * F * u, "friction": 0.1 * F * u,
+                         "cohesive": 0.05 * F * u, "W_ext": 0.65 * F * u + 1e-3 * F,
+                         "deflection_mm": u, "force_N": F})
+    summary = {"wall_s": 0.01, "steps": 100, "dt": 1e-5, "f_m": 25.0, "ke_ie_max": 0.01,
+               "energy_error": 1e-4, "n_beam_elements": 10, "n_shell_elements": 0, "contact_pairs_max": 0}
+    return FakeRun(pd.DataFrame({"deflection_mm": u, "force_N": F}), hist, summary=summary)
+'''
+
+
+@pytest.fixture(scope="module")
+def fake(tmp_path_factory):
+    path = tmp_path_factory.mktemp("fake") / "fake_hifi_model.py"
+    path.write_text(FAKE_MODEL)
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("fake_hifi_model", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def runner_of(fake):
+    return lambda cfg, case, overrides, table2: fake.run(cfg, case, cfg["hifi"]["parameters"], overrides)
+
+
+def write_prepared(path: Path, case: str, F: np.ndarray, grid: np.ndarray) -> Path:
+    with h5py.File(path, "w") as f:
+        f.attrs["test_id"] = f"bend_{case}"
+        f.attrs["entry"] = json.dumps({"kind": "three_point", "item": case})
+        f["grid"], f["mean"], f["lo"], f["hi"] = grid, F, 0.95 * F, 1.05 * F
+        g = f.create_group("samples/s1")
+        g["time_s"], g["displacement_mm"], g["force_N"] = grid / 0.5, grid, F
+    return path
+
+
+# --------------------------------------------------------------------------- calibrate/hifi.py
+
+GRID = np.linspace(0.0, 30.0, 61)
+
+
+def analytic(u, c):
+    return c * u + 0.02 * u**2
+
+
+def test_bounded_fit_recovers_a_parameter(tmp_path):
+    target = analytic(GRID, 0.37)
+    obj = hcal.HifiObjective(lambda case, p: (GRID, analytic(GRID, p["c"])), [("a", GRID, target, (0.0, 20.0))],
+                             fixed={}, names=["c"])
+    res = hcal.bounded_fit(obj, "c", (0.0, 1.0), xatol=1e-5, log_path=tmp_path / "log.h5", maxfev=40)
+    assert res.x[0] == pytest.approx(0.37, abs=1e-4)
+    assert res.nfev == len(res.trace) and res.nfev <= 40
+
+
+def test_failed_run_is_a_logged_rejected_point(tmp_path):
+    calls = []
+
+    def simulate(case, p):
+        calls.append(p["c"])
+        if p["c"] > 0.5:
+            raise RuntimeError("explicit run stopped: unstable")
+        return GRID, analytic(GRID, p["c"])
+
+    target = analytic(GRID, 0.2)
+    obj = hcal.HifiObjective(simulate, [("a", GRID, target, (0.0, 30.0))], fixed={"mu_rtp": 0.1}, names=["c"],
+                             rejected_log=tmp_path / "rejected.jsonl", key="k1")
+    res = hcal.bounded_fit(obj, "c", (0.0, 1.0), xatol=1e-4, maxfev=40)
+    assert res.x[0] == pytest.approx(0.2, abs=1e-3)             # the fit went on
+    rejected = hcal.read_rejected(tmp_path / "rejected.jsonl")
+    assert rejected and len(rejected) == sum(c > 0.5 for c in calls) == obj.n_rejected
+    assert all(r["parameters"]["c"] > 0.5 and r["parameters"]["mu_rtp"] == 0.1 for r in rejected)
+    assert all("unstable" in r["reason"] and r["key"] == "k1" and r["case"] == "a" for r in rejected)
+    assert np.isfinite(obj.penalty) and obj.penalty > 0
+    assert hcal.read_rejected(tmp_path / "rejected.jsonl", key="other") == []
+
+
+def test_inadmissible_cohesive_point_is_rejected_not_run(tmp_path):
+    obj = hcal.HifiObjective(lambda case, p: pytest.fail("must not run"), [("a", GRID, GRID, (0.0, 30.0))],
+                             fixed={"delta0": 0.05}, names=["delta_f"], rejected_log=tmp_path / "r.jsonl")
+    assert obj(np.array([0.04])) == obj.penalty
+    assert "inadmissible" in hcal.read_rejected(tmp_path / "r.jsonl")[0]["reason"]
+
+
+def test_curve_short_of_the_window_is_rejected_slightly_short_is_not():
+    F = analytic(GRID, 0.3)
+    u = np.linspace(0.0, 29.8, 300)                   # the run stopped 0.2 mm short of 30 mm
+    assert hcal.curve_error(u, analytic(u, 0.3), GRID, F, (20.0, 30.0)) < 0.5   # end value held
+    with pytest.raises(hcal.RejectedRun):
+        hcal.curve_error(GRID[GRID <= 25.0], F[GRID <= 25.0], GRID, F, (20.0, 30.0))
+
+
+@pytest.mark.parametrize("method", ["bounded", "simplex"])
+def test_interrupted_fit_is_replayed_without_simulating(tmp_path, method):
+    target = analytic(GRID, 0.37)
+    calls = []
+
+    def simulate(case, p):
+        calls.append(p["c"])
+        if len(calls) == 6 and interrupt[0]:
+            raise KeyboardInterrupt  # the job is killed mid-fit
+        return GRID, analytic(GRID, p["c"])
+
+    def fit():
+        obj = hcal.HifiObjective(simulate, [("a", GRID, target, (0.0, 30.0))], fixed={}, names=["c"])
+        if method == "bounded":
+            return hcal.bounded_fit(obj, "c", (0.0, 1.0), xatol=1e-4, log_path=tmp_path / "log.h5",
+                                    key="k", maxfev=30)
+        return hcal.simplex_fit(obj, {"c": 0.5}, xatol=1e-4, fatol=1e-8, maxfev=30,
+                                log_path=tmp_path / "log.h5", key="k")
+
+    interrupt = [True]
+    with pytest.raises(KeyboardInterrupt):
+        fit()
+    assert len(calls) == 6
+    interrupt[0] = False
+    first = fit()
+    assert len(calls) - 6 == first.nfev - 5          # the 5 logged evaluations were replayed
+    n = len(calls)
+    again = fit()                                     # a complete log: nothing is simulated
+    assert len(calls) == n and again.nfev == first.nfev
+    assert again.x[0] == first.x[0] and again.x[0] == pytest.approx(0.37, abs=1e-3)
+
+
+# --------------------------------------------------------------------------- stages/hifi_chain.py
+
+MODEL = {"cases": {"cwb19_t2_closed": {"covering": "closed_tube"}, "cwb19_t2_fabric": {"covering": "fabric_tube"}},
+         "hifi": {}}
+
+
+def test_fit_step_and_interface_table(tmp_path, fake):
+    u = np.linspace(0.0, 30.0, 101)
+    truth = dict(fake.TRUTH)
+    refs = {"cwb19_t2_closed": write_prepared(tmp_path / "closed.h5", "cwb19_t2_closed",
+                                              fake.force(u, truth, "closed_tube"), u)}
+    settings = {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": [0.0, 20.0], "method": "bounded",
+                "bounds": [0.0, 0.6], "xatol": 1e-4, "fatol": None, "maxfev": 30,
+                "start": {"mu_rtp": 0.1, "delta0": 0.05, "delta_f": 0.1, "alpha_d": 1.0},
+                "models": {"cwb19_t2_closed": MODEL}, "set": {}}
+    out = tmp_path / "mu_rtb"
+    fit = hifi_chain.fit_step("mu_rtb", settings, refs, out, runner=runner_of(fake))
+    assert fit["parameters"]["mu_rtb"] == pytest.approx(0.3, abs=1e-3)
+    assert fit["interface"]["mu_rtp"] == 0.1 and fit["role"] == "calibration"
+    rejected = hcal.read_rejected(out / "rejected.jsonl")   # the fake is unstable above mu 0.36
+    assert fit["rejected"] == len(rejected) > 0
+    for name in ("fit.json", "curve.csv", "trace.h5", "rejected.jsonl", "fit.png",
+                 "cwb19_t2_closed/summary.json", "cwb19_t2_closed/energies.csv", "cwb19_t2_closed/curve.csv"):
+        assert (out / name).exists(), name
+    assert list(pd.read_csv(out / "curve.csv").columns) == ["case", "displacement_mm", "force_N"]
+    with h5py.File(out / "trace.h5") as f:
+        assert f["error"].shape[0] == fit["nfev"]
+
+    # a rerun replays the log (no new simulation), priors feed the next step
+    calls = []
+    counting = lambda *a: calls.append(a) or runner_of(fake)(*a)  # noqa: E731
+    again = hifi_chain.fit_step("mu_rtb", settings, refs, out, runner=counting)
+    assert again["parameters"] == fit["parameters"]
+    assert len(calls) == 1                         # only the best point's artefacts are run again
+    assert len(hcal.read_rejected(out / "rejected.jsonl")) == fit["rejected"]   # not duplicated
+
+    refs["cwb19_t2_fabric"] = write_prepared(tmp_path / "fabric.h5", "cwb19_t2_fabric",
+                                             fake.force(u, truth, "fabric_tube"), u)
+    fab = {**settings, "names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": [0.0, 30.0],
+           "bounds": [0.2, 1.2], "start": {"mu_rtp": 0.1, "delta0": 0.03, "delta_f": 0.08, "alpha_d": 2.0},
+           "models": {"cwb19_t2_fabric": MODEL}}
+    fit2 = hifi_chain.fit_step("fabric", fab, refs, tmp_path / "fabric", priors=[out / "fit.json"],
+                               runner=runner_of(fake))
+    assert fit2["parameters"]["E2_over_E1"] == pytest.approx(0.6, abs=1e-3)
+    assert fit2["interface"]["mu_rtb"] == fit["parameters"]["mu_rtb"]
+
+    coh = tmp_path / "cohesive" / "fit.json"
+    coh.parent.mkdir()
+    coh.write_text(json.dumps({"item": "cohesive", "parameters": {"delta0": 0.03, "delta_f": 0.08, "alpha_d": 2.0}}))
+    rtp = tmp_path / "rtp.json"
+    rtp.write_text(json.dumps({"item": "mu_rtp", "parameters": {"mu_rtp": 0.1}}))
+    table = hifi_chain.interface_table([out / "fit.json", rtp, coh, tmp_path / "fabric" / "fit.json"],
+                                       tmp_path / "interface.csv")
+    assert list(table["parameter"]) == list(hifi_chain.INTERFACE)
+    assert list(pd.read_csv(tmp_path / "interface.csv").columns) == ["parameter", "value"]
+
+
+def test_cohesive_simplex_step_on_two_cases(tmp_path, fake):
+    u = np.linspace(0.0, 30.0, 101)
+    truth = {**fake.TRUTH}
+    refs = {c: write_prepared(tmp_path / f"{c}.h5", c, fake.force(u, truth, "closed_tube"), u)
+            for c in ("cwb19_t2_closed", "cwb19_t2_open_halflap")}
+    model = {"cases": {c: {"covering": "closed_tube"} for c in refs}, "hifi": {}}
+    settings = {"names": ["delta0", "delta_f", "alpha_d"], "cases": list(refs), "window": [20.0, 30.0],
+                "method": "simplex", "bounds": None, "xatol": 1e-3, "fatol": 1e-4, "maxfev": 60,
+                "start": {"mu_rtb": 0.3, "mu_rtp": 0.1, "delta0": 0.05, "delta_f": 0.1, "alpha_d": 1.0},
+                "models": {c: model for c in refs}, "set": {}}
+    fit = hifi_chain.fit_step("cohesive", settings, refs, tmp_path / "cohesive", runner=runner_of(fake))
+    assert fit["error_rel"] < 0.05 * fit["nfev"] and fit["nfev"] <= 60
+    assert fit["parameters"]["delta_f"] > fit["parameters"]["delta0"]
+    assert sorted(pd.read_csv(tmp_path / "cohesive" / "curve.csv")["case"].unique()) == sorted(refs)
+
+
+def test_run_case_writes_artefacts_and_error(tmp_path, fake):
+    u = np.linspace(0.0, 30.0, 101)
+    ref = write_prepared(tmp_path / "r.h5", "cwb19_t2_closed", fake.force(u, fake.TRUTH, "closed_tube"), u)
+    fit = tmp_path / "fit.json"
+    fit.write_text(json.dumps({"interface": dict(fake.TRUTH)}))
+    s = hifi_chain.run_case("cwb19_t2_closed", {"model": MODEL, "interface": {"mu_rtb": 0.0}}, tmp_path / "v",
+                            interface_fit=fit, reference=ref, role="validation", runner=runner_of(fake))
+    assert s["interface"]["mu_rtb"] == 0.3 and s["role"] == "validation"
+    assert s["measured"]["error_rel"] < 1e-3          # interpolation only
+    assert list(pd.read_csv(tmp_path / "v" / "curve.csv").columns) == ["deflection_mm", "force_N"]
+    assert (tmp_path / "v" / "energies.csv").exists()
+
+
+def test_hifi_report_section(tmp_path, fake):
+    from harnesspipe import config as cfgmod
+    from harnesspipe.report.html import hifi_section
+    cfg = cfgmod.load()
+    assert "No hi-fi results yet" in hifi_section(tmp_path, cfg, [])
+    u = np.linspace(0.0, 30.0, 101)
+    ref = write_prepared(tmp_path / "r.h5", "cwb19_t2_closed", fake.force(u, fake.TRUTH, "closed_tube"), u)
+    hifi_chain.run_case("cwb19_t2_closed", {"model": MODEL, "interface": dict(fake.TRUTH)},
+                        tmp_path / "hifi" / "virtual" / "cwb19_t2_closed", reference=ref, runner=runner_of(fake))
+    (tmp_path / "hifi" / "interface.csv").write_text(
+        "parameter,value\n" + "".join(f"{k},{v}\n" for k, v in fake.TRUTH.items()))
+    page = hifi_section(tmp_path, cfg, [ref])
+    assert "virtual test cwb19_t2_closed" in page and "Calibrated interface" in page and "Cost" in page
+    assert page.count("data:image/png;base64,") >= 2 and "281 min" in page
+
+
+# --------------------------------------------------------------------------- the rules
+
+LAUNCHER = '''
+"""harnesspipe with the hi-fi model and the ROM fit replaced by cheap stand-ins (tests only)."""
+import sys, types
+sys.path.insert(0, {fake_dir!r})
+import numpy as np
+import pandas as pd
+import fake_hifi_model
+from harnesspipe.stages import hifi_chain
+
+hifi_chain.default_runner = lambda cfg, case, overrides, table2: fake_hifi_model.run(
+    cfg, case, cfg["hifi"]["parameters"], overrides)
+
+def rom_fit(u, F, settings, log_path):
+    from harnesspipe.calibrate.simplex import EvaluationLog
+    log = EvaluationLog(log_path, ["E"], "")
+    log.append(np.array([1.0]), 0.0, 0.0)
+    res = types.SimpleNamespace(nfev=1, converged=True)
+    return types.SimpleNamespace(parameters={{"E": 20.0, "sigma_y": 0.5, "K": 2.0, "n": 0.3}},
+                                 E_eq13=20.0, sigma_y_eq13=0.5, result=res)
+
+hifi_chain._rom_fit = rom_fit
+hifi_chain._rom_simulate = lambda p, s: pd.DataFrame({{"deflection_mm": [0.0, 30.0], "force_N": [0.0, 10.0]}})
+from harnesspipe.cli import main
+sys.exit(main(sys.argv[1:]))
+'''
+
+
+def snakemake(project: Path, *args: str, config=()) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(project / "src")}
+    return subprocess.run([sys.executable, "-m", "snakemake", "--cores", "2", *args,
+                           "--config", "profile=quick", *config],
+                          cwd=project, env=env, capture_output=True, text=True)
+
+
+def planned(run: subprocess.CompletedProcess) -> dict[str, int]:
+    """Rule -> job count of a dry run ({} when nothing is to be done)."""
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    text = run.stdout + run.stderr
+    if "Nothing to be done" in text:
+        return {}
+    table = text.split("Job stats:")[1]
+    return {m.group(1): int(m.group(2)) for m in re.finditer(r"^(\w+)\s+(\d+)\s*$", table, re.M)
+            if m.group(1) != "total"}
+
+
+def planned_wildcards(run: subprocess.CompletedProcess) -> set[str]:
+    return set(re.findall(r"wildcards: (\S+)", run.stdout + run.stderr))
+
+
+@pytest.fixture(scope="module")
+def project(tmp_path_factory, fake):
+    """A project copy whose upstream results (data, Table 2) exist and whose hifi rules ran
+    with the stand-ins, so that Snakemake holds their params metadata."""
+    root = tmp_path_factory.mktemp("hifi_rules")
+    project = copy_project(root / "project")
+    fake_dir = Path(fake.__file__).parent
+    launcher = project / "fake_hp.py"
+    launcher.write_text(LAUNCHER.format(fake_dir=str(fake_dir)))
+    snakefile = project / "Snakefile"
+    text = snakefile.read_text()
+    assert "HP = f'\"{PY}\" -m harnesspipe'" in text
+    snakefile.write_text(text.replace("HP = f'\"{PY}\" -m harnesspipe'", f"HP = f'\"{{PY}}\" {launcher}'"))
+    # upstream outputs without running their (slow) rules: files present, then touched in DAG order
+    run = snakemake(project, "--summary", "hifi_chain_all", "hifi_crosscheck_all")
+    assert run.returncode == 0, run.stderr[-3000:]
+    upstream = []
+    for line in run.stdout.splitlines()[1:]:
+        cols = line.split("\t")
+        if len(cols) > 2 and not cols[2].startswith("hifi"):
+            upstream.append(cols[0])
+    from harnesspipe.stages.data import prepare_test
+    from harnesspipe.stages.tensile import TABLE2_COLUMNS
+    for path in upstream:
+        target = project / path
+        target.parent.mkdir(parents=True, exist_ok=True)
+        m = re.fullmatch(r"results/data/(\w+)\.h5", path)
+        if m:
+            prepare_test(project / "data" / "experimental", m.group(1), target)
+        elif path.endswith("table2.csv"):
+            pd.DataFrame([{"component": c, "E": 1000.0, "sigma_y": 9.0, "K": 25.0, "n": 0.5}
+                          for c in ("closed_tube", "open_tube", "fabric_tube")],
+                         columns=TABLE2_COLUMNS).to_csv(target, index=False)
+        else:
+            target.write_text("placeholder\n")
+    run = snakemake(project, "--touch", *upstream)
+    assert run.returncode == 0, run.stderr[-3000:]
+    run = snakemake(project, "hifi_chain_all", "hifi_crosscheck_all")
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-6000:]
+    return project
+
+
+def test_hifi_targets_resolve_and_run(project):
+    res = project / "results" / "hifi"
+    assert list(pd.read_csv(res / "interface.csv")["parameter"]) == list(hifi_chain.INTERFACE)
+    assert list(pd.read_csv(res / "crosscheck" / "table3.csv").columns) == ["case", "E", "sigma_y", "K", "n",
+                                                                            "reference"]
+    for step in ("mu_rtb", "mu_rtp", "cohesive", "fabric"):
+        for name in ("fit.json", "curve.csv", "trace.h5", "rejected.jsonl", "fit.png"):
+            assert (res / "chain" / step / name).exists()
+    virtual = sorted(p.name for p in (res / "virtual").iterdir())
+    assert "twb19_t2" in virtual and "cwb10t1_9t2_fabric" in virtual and len(virtual) == 9
+    s = json.loads((res / "virtual" / "cwb19_t1_open_coarse" / "summary.json").read_text())
+    assert s["role"] == "validation" and "measured" in s
+    assert "measured" not in json.loads((res / "virtual" / "twb19_t2" / "summary.json").read_text())
+    assert planned(snakemake(project, "-n", "hifi_chain_all", "hifi_crosscheck_all")) == {}
+
+
+@pytest.mark.parametrize("overlay, crosscheck", [
+    ("coverings:\n  fabric_tube:\n    nu12: 0.3\n", True),          # the fabric's Poisson ratio (eq. 12)
+    ("hifi:\n  pipeline:\n    E2_bounds: [0.3, 1.1]\n", False),    # read by the E2/E1 fit only
+])
+def test_fabric_parameter_reruns_only_fabric_fits(project, overlay, crosscheck):
+    path = project / "overlay.yaml"                 # merged over config/config.yaml
+    path.write_text(overlay)
+    run = snakemake(project, "hifi_chain_all", "hifi_crosscheck_all", "-n", "--configfile", str(path))
+    jobs = planned(run)
+    expected = {"hifi_fit": 1, "hifi_interface": 1, "hifi_virtual": 2, "hifi_chain_all": 1}
+    fabric = {"step=fabric", "case=cwb19_t2_fabric", "case=cwb10t1_9t2_fabric"}
+    if crosscheck:
+        expected.update({"hifi_crosscheck": 2, "hifi_crosscheck_rom": 2, "hifi_crosscheck_table": 1,
+                         "hifi_crosscheck_all": 1})
+    assert jobs == expected
+    assert planned_wildcards(run) == fabric
+
+
+def test_hifi_rules_stay_out_of_all(project):
+    jobs = planned(snakemake(project, "-n", "--rerun-triggers", "mtime", "params", "input", "code"))
+    assert not any(rule.startswith("hifi") for rule in jobs)

@@ -1,0 +1,282 @@
+# Hi-fi virtual three-point tests (DESIGN stages 3-7 on the mesoscale model, Sec. 4.1-4.3):
+#   hifi_crosscheck_all: every Table 3 case at the PAPER's Table 2 and interface values, then
+#       eq. 13 + simplex on each curve -> results/hifi/crosscheck/table3.csv beside the paper's;
+#   hifi_chain_all: the Sec. 4.2 calibration chain against the measured means
+#       (mu_rtb -> mu_rtp -> cohesive -> E2/E1) -> results/hifi/interface.csv, then the virtual
+#       test of every case (incl. hifi.extra_cases) at the fitted interface.
+# Hours at the default profile on 2 cores: part of `all` only with hifi.pipeline.in_all.
+# Every run is one thread, so two run side by side.
+
+HIFI = config["hifi"]["pipeline"]
+HIFI_CASES = {**config["cases"], **config["hifi"]["extra_cases"]}
+HIFI_CROSSCHECK = sorted(c for c in config["paper"]["table3"] if c in config["cases"])
+HIFI_BUDGET = HIFI["budgets"].get(config["profile"], HIFI["budgets"]["default"])
+HIFI_MEASURED = {e["item"]: t for t, e in sorted(TESTS.items()) if e.get("kind") == "three_point"}
+INTERFACE_NAMES = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1")
+
+for _name in ("friction_window", "cohesive_window", "fabric_window", "mu_bounds", "E2_bounds"):
+    if not HIFI[_name][0] < HIFI[_name][1]:
+        raise ValueError(f"config hifi.pipeline.{_name}: {HIFI[_name]} must increase")
+
+# The chain of Sec. 4.2 in order: each step fixes what the earlier steps fitted.
+HIFI_STEPS = {
+    "mu_rtb": {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": "friction_window",
+               "method": "bounded", "bounds": "mu_bounds", "prior": []},
+    "mu_rtp": {"names": ["mu_rtp"], "cases": ["cwb19_t2_open_halflap"], "window": "friction_window",
+               "method": "bounded", "bounds": "mu_bounds", "prior": ["mu_rtb"]},
+    "cohesive": {"names": ["delta0", "delta_f", "alpha_d"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
+                 "window": "cohesive_window", "method": "simplex", "prior": ["mu_rtb", "mu_rtp"]},
+    "fabric": {"names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": "fabric_window",
+               "method": "bounded", "bounds": "E2_bounds", "prior": ["mu_rtb", "mu_rtp", "cohesive"]},
+}
+HIFI_VALIDATION = ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric")   # Sec. 4.2: predicted, no refit
+HIFI_CALIBRATED = sorted({c for s in HIFI_STEPS.values() for c in s["cases"]})
+
+
+def hifi_fabric(case):
+    return HIFI_CASES[case]["covering"] == "fabric_tube"
+
+
+def hifi_model(case, paper_coverings=False):
+    """The part of the config a hi-fi run of `case` reads: its case entry, the covering it has
+    (and its material), wires and tape, test geometry, explicit settings and resolution.
+    A change elsewhere (another covering, the ROM, the branch) reruns none of its runs."""
+    c = HIFI_CASES[case]
+    cov = c["covering"]
+    covs = {} if cov == "none" else {cov: config["coverings"][cov]}
+    mats = {k: config["materials"][k] for k in ("wire_type1", "wire_type2", "pvc_tape")}
+    if covs:
+        mats[covs[cov]["material"]] = config["materials"][covs[cov]["material"]]
+    model = {
+        "profile": config["profile"],
+        "profiles": {config["profile"]: {"hifi": PROFILE["hifi"]}},
+        "cases": {case: c},
+        "hifi": {"coverings": "paper", "explicit": config["hifi"]["explicit"], "extra_cases": {}},
+        "interfaces": config["interfaces"],
+        "explicit": config["explicit"],
+        "materials": mats,
+        "coverings": covs,
+        "three_point": config["three_point"],
+    }
+    if paper_coverings:
+        model["paper"] = {"table2": {k: v for k, v in config["paper"]["table2"].items() if k in covs}}
+    return model
+
+
+def hifi_interface_of(case, values):
+    """Interface values a run of `case` uses (E2/E1 only with a fabric covering)."""
+    return {k: v for k, v in values.items() if k != "E2_over_E1" or hifi_fabric(case)}
+
+
+def hifi_run_settings(case, crosscheck):
+    return json.dumps({
+        "model": hifi_model(case, paper_coverings=crosscheck),
+        "interface": hifi_interface_of(case, config["paper"]["interface"]) if crosscheck else {},
+        "set": HIFI["set"],
+    }, sort_keys=True)
+
+
+def hifi_fit_settings(step):
+    s = HIFI_STEPS[step]
+    bounded = s["method"] == "bounded"
+    fabric = any(hifi_fabric(c) for c in s["cases"])
+    start = {k: v for k, v in config["hifi"]["parameters"].items()
+             if (k != "E2_over_E1" or fabric) and (k not in s["names"] or not bounded)}
+    return json.dumps({
+        "names": s["names"], "cases": s["cases"], "window": HIFI[s["window"]], "method": s["method"],
+        "bounds": HIFI[s["bounds"]] if bounded else None,
+        "xatol": HIFI["bounded_xatol"] if bounded else HIFI["simplex"]["xatol"],
+        "fatol": None if bounded else HIFI["simplex"]["fatol"],
+        "maxfev": HIFI_BUDGET["bounded_maxfev" if bounded else "simplex_maxfev"],
+        "start": start, "models": {c: hifi_model(c) for c in s["cases"]}, "set": HIFI["set"],
+    }, sort_keys=True)
+
+
+def hifi_rom_settings(case):
+    return json.dumps({**json.loads(rom_settings(case)), "reference": "hifi"}, sort_keys=True)
+
+
+def hifi_prepared(case):
+    return f"{RES}/data/{test_id_for('three_point', case)}.h5"
+
+
+def hifi_fit_inputs(wc):
+    s = HIFI_STEPS[wc.step]
+    return {"refs": [hifi_prepared(c) for c in s["cases"]],
+            "table2": f"{RES}/tensile/table2.csv",
+            "priors": [f"{RES}/hifi/chain/{p}/fit.json" for p in s["prior"]],
+            "warm": rules.numba_warmup.output[0]}
+
+
+def hifi_virtual_inputs(wc):
+    step = "fabric" if hifi_fabric(wc.case) else "cohesive"
+    inputs = {"table2": f"{RES}/tensile/table2.csv", "interface": f"{RES}/hifi/chain/{step}/fit.json",
+              "warm": rules.numba_warmup.output[0]}
+    if wc.case in HIFI_MEASURED:
+        inputs["ref"] = f"{RES}/data/{HIFI_MEASURED[wc.case]}.h5"
+    return inputs
+
+
+def hifi_role(case):
+    if case in HIFI_VALIDATION:
+        return "validation"
+    return "calibration" if case in HIFI_CALIBRATED else "prediction"
+
+
+HIFI_CODE = source_hash("fe", "models/hifi.py", "models/hifi_mesh.py", "models/hifi_parts.py",
+                        "models/tube_equivalent.py", "models/tensile.py", "stages/hifi.py",
+                        "stages/hifi_chain.py", "stages/common.py", "config.py")
+HIFI_FIT_CODE = source_hash("fe", "models/hifi.py", "models/hifi_mesh.py", "models/hifi_parts.py",
+                            "models/tube_equivalent.py", "models/tensile.py", "stages/hifi.py",
+                            "stages/hifi_chain.py", "stages/common.py", "stages/data.py", "config.py",
+                            "calibrate/hifi.py", "calibrate/simplex.py", "calibrate/objective.py")
+HIFI_ROM_CODE = source_hash("fe", "models/rom_beam.py", "rom.py", "calibrate/rom.py", "calibrate/eq13.py",
+                            "calibrate/simplex.py", "calibrate/objective.py", "calibrate/hifi.py",
+                            "stages/hifi_chain.py", "stages/common.py")
+
+
+rule hifi_crosscheck:
+    """Hi-fi test of a Table 3 case at the paper's Table 2 coverings and interface (Sec. 4.1)."""
+    input:
+        warm=rules.numba_warmup.output,
+    output:
+        curve=f"{RES}/hifi/crosscheck/{{case}}/curve.csv",
+        summary=f"{RES}/hifi/crosscheck/{{case}}/summary.json",
+        energies=f"{RES}/hifi/crosscheck/{{case}}/energies.csv",
+    log:
+        f"{RES}/logs/hifi_crosscheck_{{case}}.log",
+    params:
+        settings=lambda wc: hifi_run_settings(wc.case, crosscheck=True),
+        code=HIFI_CODE,
+    wildcard_constraints:
+        case="|".join(HIFI_CROSSCHECK) or "none^",
+    threads: 1
+    shell:
+        "NUMBA_NUM_THREADS={threads} {HP} stage hifi-run --case {wildcards.case} --role crosscheck "
+        "--settings '{params.settings}' --outdir {RES}/hifi/crosscheck/{wildcards.case} > {log} 2>&1"
+
+
+rule hifi_crosscheck_rom:
+    """eq. 13 + simplex (the ROM stage's fit) on the cross-check curve of one case (Sec. 4.3)."""
+    input:
+        curve=f"{RES}/hifi/crosscheck/{{case}}/curve.csv",
+        warm=rules.numba_warmup.output,
+    output:
+        fit=f"{RES}/hifi/crosscheck/{{case}}/rom/fit.json",
+        curve=f"{RES}/hifi/crosscheck/{{case}}/rom/curve.csv",
+        trace=f"{RES}/hifi/crosscheck/{{case}}/rom/trace.h5",
+        plot=report(f"{RES}/hifi/crosscheck/{{case}}/rom/fit.png", caption="../report/hifi.rst",
+                    category="Hi-fi (Sec. 4)", subcategory="cross-check {case}"),
+    log:
+        f"{RES}/logs/hifi_crosscheck_rom_{{case}}.log",
+    params:
+        settings=lambda wc: hifi_rom_settings(wc.case),
+        code=HIFI_ROM_CODE,
+    wildcard_constraints:
+        case="|".join(HIFI_CROSSCHECK) or "none^",
+    threads: 1
+    shell:
+        "NUMBA_NUM_THREADS={threads} {HP} stage hifi-rom --case {wildcards.case} --curve {input.curve} "
+        "--settings '{params.settings}' --outdir {RES}/hifi/crosscheck/{wildcards.case}/rom > {log} 2>&1"
+
+
+rule hifi_crosscheck_table:
+    """Table 3 from the hi-fi curves: results/hifi/crosscheck/table3.csv (case,E,sigma_y,K,n,reference)."""
+    input:
+        [f"{RES}/hifi/crosscheck/{c}/rom/fit.json" for c in HIFI_CROSSCHECK],
+    output:
+        f"{RES}/hifi/crosscheck/table3.csv",
+    log:
+        f"{RES}/logs/hifi_crosscheck_table.log",
+    params:
+        code=source_hash("stages/rom.py"),
+    shell:
+        "{HP} stage table3 --fits {input} --out {output} > {log} 2>&1"
+
+
+rule hifi_fit:
+    """One step of the Sec. 4.2 chain (bounded search or Nelder-Mead) on the measured means."""
+    input:
+        unpack(hifi_fit_inputs),
+    output:
+        fit=f"{RES}/hifi/chain/{{step}}/fit.json",
+        curve=f"{RES}/hifi/chain/{{step}}/curve.csv",
+        trace=f"{RES}/hifi/chain/{{step}}/trace.h5",
+        rejected=f"{RES}/hifi/chain/{{step}}/rejected.jsonl",
+        plot=report(f"{RES}/hifi/chain/{{step}}/fit.png", caption="../report/hifi.rst",
+                    category="Hi-fi (Sec. 4)", subcategory="calibration {step}"),
+    log:
+        f"{RES}/logs/hifi_fit_{{step}}.log",
+    params:
+        settings=lambda wc: hifi_fit_settings(wc.step),
+        refs=lambda wc: " ".join(f"{c}={hifi_prepared(c)}" for c in HIFI_STEPS[wc.step]["cases"]),
+        code=HIFI_FIT_CODE,
+    wildcard_constraints:
+        step="|".join(HIFI_STEPS),
+    threads: 1
+    shell:
+        "NUMBA_NUM_THREADS={threads} {HP} stage hifi-fit --step {wildcards.step} "
+        "--settings '{params.settings}' --reference {params.refs} --coverings {input.table2} "
+        "--prior {input.priors} --outdir {RES}/hifi/chain/{wildcards.step} > {log} 2>&1"
+
+
+rule hifi_interface:
+    """The calibrated interface: results/hifi/interface.csv (parameter,value)."""
+    input:
+        [f"{RES}/hifi/chain/{s}/fit.json" for s in HIFI_STEPS],
+    output:
+        f"{RES}/hifi/interface.csv",
+    log:
+        f"{RES}/logs/hifi_interface.log",
+    params:
+        code=source_hash("stages/hifi_chain.py"),
+    shell:
+        "{HP} stage hifi-interface --fits {input} --out {output} > {log} 2>&1"
+
+
+rule hifi_virtual:
+    """Virtual test of a case at the calibrated interface (validations: no refit)."""
+    input:
+        unpack(hifi_virtual_inputs),
+    output:
+        curve=f"{RES}/hifi/virtual/{{case}}/curve.csv",
+        summary=f"{RES}/hifi/virtual/{{case}}/summary.json",
+        energies=f"{RES}/hifi/virtual/{{case}}/energies.csv",
+    log:
+        f"{RES}/logs/hifi_virtual_{{case}}.log",
+    params:
+        settings=lambda wc: hifi_run_settings(wc.case, crosscheck=False),
+        ref=lambda wc, input: f"--reference {input.ref}" if "ref" in input.keys() else "",
+        role=lambda wc: hifi_role(wc.case),
+        code=HIFI_CODE,
+    wildcard_constraints:
+        case="|".join(sorted(HIFI_CASES)),
+    threads: 1
+    shell:
+        "NUMBA_NUM_THREADS={threads} {HP} stage hifi-run --case {wildcards.case} --role {params.role} "
+        "--settings '{params.settings}' --coverings {input.table2} --interface {input.interface} "
+        "{params.ref} --outdir {RES}/hifi/virtual/{wildcards.case} > {log} 2>&1"
+
+
+HIFI_CROSSCHECK_TARGETS = [f"{RES}/hifi/crosscheck/table3.csv"] + [
+    f"{RES}/hifi/crosscheck/{c}/summary.json" for c in HIFI_CROSSCHECK]
+HIFI_CHAIN_TARGETS = [f"{RES}/hifi/interface.csv"] + [
+    f"{RES}/hifi/virtual/{c}/summary.json" for c in sorted(HIFI_CASES)]
+
+
+rule hifi_crosscheck_all:
+    """Table 3 from hi-fi runs at the paper's values (not part of `all` unless hifi.pipeline.in_all)."""
+    input:
+        HIFI_CROSSCHECK_TARGETS,
+
+
+rule hifi_chain_all:
+    """The Sec. 4.2 calibration chain and the virtual tests (not part of `all` unless hifi.pipeline.in_all)."""
+    input:
+        HIFI_CHAIN_TARGETS,
+
+
+if HIFI["in_all"]:
+    TARGETS.extend(HIFI_CROSSCHECK_TARGETS + HIFI_CHAIN_TARGETS)
+    # the report lists the hi-fi results; as its inputs it is built after them
+    FITS["hifi"] = HIFI_CROSSCHECK_TARGETS + HIFI_CHAIN_TARGETS
