@@ -711,8 +711,10 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
     has a dead zone of width ~ 2 (r + t/2) tan(kink/2) through which nodes sink and then
     get pushed out with energy that was never stored.  The force direction is the unit
     vector from the closest point to the node (the facet normal inside a facet); a node
-    already behind the mid-surface (side test ``quad_sign * n . d < 0``) is pushed along the
-    facet normal, up to the penetration ``pen_max``.  Limitation: one contact per node and
+    already behind the mid-surface (side test ``quad_sign * n . d < 0``) over the facet's
+    interior is pushed along the facet normal, up to the penetration ``pen_max``; behind the
+    plane but beside the facet (closest point on its boundary: a wire beyond the tube's end,
+    an open cut's edge) is no contact.  Limitation: one contact per node and
     set, so a node pinched between two opposite walls of the same set (a tube flattened
     below one wire diameter) only sees the nearer one.
     Returns the number of active contacts.
@@ -850,11 +852,14 @@ def _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, p0, p
             pd[p, 3] = d0 / dist
             pd[p, 4] = d1 / dist
             pd[p, 5] = d2 / dist
-        else:                    # behind the mid-surface: push out along the normal
+        elif abs(prj[0]) < 1.0 - 1e-9 and abs(prj[1]) < 1.0 - 1e-9:
+            # behind the mid-surface, over the facet's interior: push out along the normal
             pd[p, 2] = -dist
             pd[p, 3] = sg * prj[5]
             pd[p, 4] = sg * prj[6]
             pd[p, 5] = sg * prj[7]
+        # else: behind the plane but beside the facet (closest point on its boundary, e.g.
+        # a wire beyond the tube's end or an open cut's edge): not a penetration
 
 
 # ------------------------------------------------------------------ (d) cohesive ties
