@@ -9,8 +9,9 @@ paper's Nelder-Mead (:func:`harnesspipe.calibrate.simplex.nelder_mead`).
 Robustness.  A hi-fi run that fails -- unstable, energy balance lost, KE/IE above
 its limit -- is a *rejected point*: its parameters and reason go to the log and the
 objective returns the penalty ``REJECT_FACTOR x ||F_exp||`` (finite, so that Brent's
-parabolic steps stay defined; a curve that matches nothing scores at most
-``||F_exp||``, so the penalty is always worse than any successful run).  Every
+parabolic steps stay defined; a zero force scores ``||F_exp||``, so the penalty is worse
+than any run within a factor of about ten of the measurement -- a run further off is
+no basis for a calibration anyway).  Every
 evaluation is appended to an HDF5 log as it happens; a rerun after an interruption
 replays the logged evaluations instead of recomputing them.
 """

@@ -188,9 +188,10 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
     else:
         raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex")
     best = objective.params(res.x)
-    if not np.isfinite(res.fun) or res.fun >= objective.penalty:
-        raise hcal.RejectedRun(f"hifi fit {step}: every evaluation was rejected "
-                               f"(see {rejected_live})")
+    rejected_keys = {_pkey(r["parameters"]) for r in hcal.read_rejected(rejected_live, key)}
+    if not np.isfinite(res.fun) or _pkey(best) in rejected_keys:
+        raise hcal.RejectedRun(f"hifi fit {step}: the best point is a rejected one: no evaluation "
+                               f"succeeded (see {rejected_live})")
     # the best point's runs: kept from this process, else (replayed evaluations) run again
     curves, per_case, reruns = [], {}, 0
     for case in cases:
