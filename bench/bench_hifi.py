@@ -50,7 +50,7 @@ def run(profile: str, overrides: dict | None = None):
     from harnesspipe.stages.hifi import inputs
     cfg = load()
     cfg["profile"] = profile
-    cfg["explicit"]["ke_ie_max"] = 100.0     # measured and reported, not enforced here
+    cfg["explicit"]["ke_ie_fail"] = 100.0     # measured and reported, not enforced here
     return three_point(inputs(cfg, CASE, overrides or {}))
 
 

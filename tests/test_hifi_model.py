@@ -93,7 +93,7 @@ def cwb_run(tmp_path_factory):
     from harnesspipe.stages.hifi import run_case
     cfg = load()
     cfg["profile"] = "quick"
-    cfg["explicit"]["ke_ie_max"] = 100.0
+    cfg["explicit"]["ke_ie_fail"] = 100.0
     out = tmp_path_factory.mktemp("hifi")
     summary = run_case(cfg, "cwb19_t2_open_coarse", {"t_total": "0.3"}, coverings=None,
                        out_csv=out / "curve.csv", summary_json=out / "summary.json",

@@ -221,6 +221,7 @@ class HifiSystem:
                                         hist=np.zeros((nodes.size, 3, 3))))
         # wires (and tape) against the covering and tape facets
         self.facet_sets = []
+        self.cut = None
         if self.has_shells:
             cov = np.flatnonzero(mesh.shell_part != hm.PART_TAPE)
             if cov.size:
@@ -237,32 +238,44 @@ class HifiSystem:
                 self._cut_contact()
 
     def _cut_contact(self):
-        """Self-contact across the open tube's cut: the edges may open freely; when they close
-        they cannot pass through each other but ride one over the other, edge a (phi = 0)
-        outside the mid-surface of edge b (phi = 2 pi) and edge b inside that of a.  The
-        seam nodes start coincident, so the contact acts on the mid-surfaces (zero radius
-        and thickness) and reaches half the wall's contact thickness deep."""
+        """Self-contact across the open tube's cut (node pairs ``a`` at phi = 0, ``b`` at
+        phi = 2 pi, coincident at the start): the cut may open freely but its edges cannot
+        pass through each other in the hoop direction.  With ``t`` the unit vector from
+        ``a`` to its hoop neighbour (into a's side of the wall, current configuration), the
+        overlap is ``p = (x_b - x_a) . t``; a positive overlap is resisted by the penalty
+        ``k p`` along ``t`` (energy 1/2 k p^2).  Radial riding of one edge over the other is
+        not resisted (one wall thickness, the ridged tube's 1.7 mm, is not resolved there)."""
         mesh = self.mesh
-        tube = mesh.shell_part == hm.PART_TUBE
-        half = 0.5 * float(np.max(mesh.shell_thickness[tube]))
-        for own, other, sign in ((0, 1, 1.0), (1, 0, -1.0)):
-            nodes = mesh.cut_pairs[:, own].astype(np.int64)
-            quads = np.flatnonzero(tube & np.any(np.isin(self.sconn, mesh.cut_pairs[:, other]), axis=1))
-            self._facet_set(nodes, np.zeros(nodes.size), quads, sign, t=0.0, pen_max=half)
+        a, b = mesh.cut_pairs[:, 0].astype(np.int64), mesh.cut_pairs[:, 1].astype(np.int64)
+        tube = self.sconn[mesh.shell_part == hm.PART_TUBE]
+        nbr = np.empty_like(a)
+        for j, node in enumerate(a):
+            cand = np.unique(tube[np.any(tube == node, axis=1)])
+            cand = cand[(cand != node) & (np.abs(mesh.X[cand, 0] - mesh.X[node, 0]) < 1e-6)]
+            cand = cand[~np.isin(cand, b)]
+            nbr[j] = cand[np.argmin(np.linalg.norm(mesh.X[cand] - mesh.X[node], axis=1))]
+        self.cut = (a, b, nbr, self._penalty(self.mass[np.r_[a, b], 0]))
 
-    def _facet_set(self, nodes, r, quads, sign, t=None, pen_max=None):
+    def _cut_forces(self, fn) -> int:
+        a, b, nbr, k = self.cut
+        t = self.x[nbr] - self.x[a]
+        t /= np.linalg.norm(t, axis=1)[:, None]
+        p = np.einsum("ij,ij->i", self.x[b] - self.x[a], t)
+        on = p > 0.0
+        f = (k * p[on])[:, None] * t[on]
+        np.add.at(fn[:, :3], a[on], f)
+        np.subtract.at(fn[:, :3], b[on], f)
+        return int(on.sum())
+
+    def _facet_set(self, nodes, r, quads, sign):
         itf = self.inp.interface
         q = np.ascontiguousarray(self.sconn[quads])
         qn = np.unique(q)
         k = self._penalty(np.r_[self.mass[nodes, 0], self.mass[qn, 0]])
-        if t is None:
-            t = self.mesh.shell_thickness[quads]
-        t = np.ascontiguousarray(np.broadcast_to(t, (q.shape[0],)), dtype=float)
-        if pen_max is None:
-            pen_max = float(np.max(r) + 0.5 * np.max(t))
+        t = np.ascontiguousarray(self.mesh.shell_thickness[quads], dtype=float)
         fs = dict(nodes=np.ascontiguousarray(nodes, dtype=np.int64),
                   r=np.ascontiguousarray(r, float).copy(), quads=q, t=t,
-                  sign=np.full(q.shape[0], sign), k=k, pen_max=pen_max,
+                  sign=np.full(q.shape[0], sign), k=k, pen_max=float(np.max(r) + 0.5 * np.max(t)),
                   hist=ce.new_slot_history(nodes.size), pairs=np.zeros((0, 2), dtype=np.int64),
                   mu=(itf["mu_s"], itf["mu_k"], itf["d_c"]))
         self._adjust_initial_gaps(fs)
@@ -449,6 +462,8 @@ class HifiSystem:
                                       self.ww_pairs, self.k_ww, self.k_ww, itf["mu_s"],
                                       itf["mu_k"], itf["d_c"], dt, self.time_scale,
                                       self.ww_hist[0], self.ww_hist[1], fn, ft)
+        if self.cut is not None:
+            active += self._cut_forces(fn)
         for fs in self.facet_sets:
             mu_s, mu_k, d_c = fs["mu"]
             active += ce.node_facet_contact(self.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"],
@@ -559,7 +574,9 @@ def quasi_static_ratio(history, stroke: float, start: float = KE_IE_FROM) -> flo
 
 def three_point(inp: HifiInputs, n_shapes: int = 4, settings: DynamicsSettings | None = None) -> HifiRun:
     """Run the virtual three-point test; raises ExplicitError when the run goes unstable or
-    its KE/IE exceeds ``config.explicit.ke_ie_max`` (a quasi-static test that is not)."""
+    its KE/IE exceeds ``config.explicit.ke_ie_fail`` (a quasi-static test that is not).  The
+    summary reports KE/IE against the paper's target ``config.explicit.ke_ie_max`` (2 %)
+    as ``quasi_static``."""
     t0 = time.perf_counter()
     mesh = hm.build_mesh(inp.case, inp.config, inp.resolution)
     system = HifiSystem(mesh, inp)
@@ -578,7 +595,7 @@ def three_point(inp: HifiInputs, n_shapes: int = 4, settings: DynamicsSettings |
     hist = res.history
     ke_ie = quasi_static_ratio(hist, inp.config["three_point"]["deflection"],
                                float(inp.explicit.get("ke_ie_from", KE_IE_FROM)))
-    limit = inp.config["explicit"]["ke_ie_max"]
+    limit = inp.config["explicit"]["ke_ie_fail"]
     if ke_ie > limit:
         from harnesspipe.fe.explicit import ExplicitError
         h = hist.iloc[-1]
@@ -590,6 +607,7 @@ def three_point(inp: HifiInputs, n_shapes: int = 4, settings: DynamicsSettings |
         "wall_s": time.perf_counter() - t0, "solver_wall_s": res.wall_s, "steps": res.n_steps,
         "dt": res.dt, "f_m": ex["f_m"], "t_total": system.T, "time_scale": system.time_scale,
         "ke_ie_max": ke_ie, "ke_ie_max_after_ramp": res.ke_ie_max,
+        "quasi_static": bool(ke_ie <= inp.config["explicit"]["ke_ie_max"]),
         "energy_error": res.energy_error,
         "n_beam_elements": int(mesh.beam_conn.shape[0]), "n_shell_elements": int(mesh.shell_conn.shape[0]),
         "n_nodes": int(mesh.n_nodes), "n_ties": system.n_ties(),
