@@ -50,3 +50,15 @@ rule numba_warmup:
         f"{RES}/logs/numba_warmup.log",
     shell:
         "{HP} stage warmup > {log} 2>&1 && cp {log} {output}"
+
+
+rule hifi_warmup:
+    """The same for the hi-fi model's kernels (only the hi-fi rules need them)."""
+    input:
+        rules.numba_warmup.output,
+    output:
+        f"{RES}/logs/hifi_warmup_{source_hash('fe')}.done",
+    log:
+        f"{RES}/logs/hifi_warmup.log",
+    shell:
+        "{HP} stage warmup --hifi > {log} 2>&1 && cp {log} {output}"

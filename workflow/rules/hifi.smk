@@ -105,13 +105,13 @@ def hifi_fit_inputs(wc):
     return {"refs": [hifi_prepared(c) for c in s["cases"]],
             "table2": f"{RES}/tensile/table2.csv",
             "priors": [f"{RES}/hifi/chain/{p}/fit.json" for p in s["prior"]],
-            "warm": rules.numba_warmup.output[0]}
+            "warm": rules.hifi_warmup.output[0]}
 
 
 def hifi_virtual_inputs(wc):
     step = "fabric" if hifi_fabric(wc.case) else "cohesive"
     inputs = {"table2": f"{RES}/tensile/table2.csv", "interface": f"{RES}/hifi/chain/{step}/fit.json",
-              "warm": rules.numba_warmup.output[0]}
+              "warm": rules.hifi_warmup.output[0]}
     if wc.case in HIFI_MEASURED:
         inputs["ref"] = f"{RES}/data/{HIFI_MEASURED[wc.case]}.h5"
     return inputs
@@ -138,7 +138,7 @@ HIFI_ROM_CODE = source_hash("fe", "models/rom_beam.py", "rom.py", "calibrate/rom
 rule hifi_crosscheck:
     """Hi-fi test of a Table 3 case at the paper's Table 2 coverings and interface (Sec. 4.1)."""
     input:
-        warm=rules.numba_warmup.output,
+        warm=rules.hifi_warmup.output,
     output:
         curve=f"{RES}/hifi/crosscheck/{{case}}/curve.csv",
         summary=f"{RES}/hifi/crosscheck/{{case}}/summary.json",

@@ -25,6 +25,7 @@ def register(sub) -> None:
     ssub = stage.add_subparsers(dest="stage_command", required=True, metavar="STEP")
 
     p = ssub.add_parser("warmup", help="compile or load every Numba kernel once")
+    p.add_argument("--hifi", action="store_true", help="the hi-fi model's kernels instead")
     p.set_defaults(func=_warmup)
 
     p = ssub.add_parser("rom-fit", help="eq. 13 + simplex for one CWB case (Sec. 4.3)")
@@ -105,8 +106,8 @@ def register(sub) -> None:
 
 
 def _warmup(args) -> int:
-    from harnesspipe.stages.warmup import warm_up
-    for name, seconds in warm_up().items():
+    from harnesspipe.stages.warmup import warm_up, warm_up_hifi
+    for name, seconds in (warm_up_hifi() if args.hifi else warm_up()).items():
         print(f"{name}: {seconds:.2f} s")
     return 0
 

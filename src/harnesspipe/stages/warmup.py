@@ -4,6 +4,24 @@ from __future__ import annotations
 import time
 
 
+def warm_up_hifi() -> dict[str, float]:
+    """Build the quick hi-fi model of an open, coarse-taped CWB (every contact, tie and
+    element kind but fabric) and of a fabric CWB, and integrate their first 2 ms."""
+    from harnesspipe.config import load
+    from harnesspipe.fe.dynamics import integrate
+    from harnesspipe.models import hifi, hifi_mesh
+    from harnesspipe.stages.hifi import inputs
+    cfg = load()
+    cfg["profile"] = "quick"
+    timings = {}
+    for case in ("cwb19_t2_open_coarse", "cwb19_t2_fabric"):
+        t0 = time.perf_counter()
+        inp = inputs(cfg, case, {})
+        integrate(hifi.HifiSystem(hifi_mesh.build_mesh(inp.case, cfg, inp.resolution), inp), 0.002)
+        timings[f"hifi {case}"] = time.perf_counter() - t0
+    return timings
+
+
 def warm_up() -> dict[str, float]:
     """Run each model once on a tiny problem; return the wall time of each."""
     from harnesspipe import rom
