@@ -76,12 +76,61 @@ def row(profile: str, r, median: float, walls) -> str:
             f"{s['ke_ie_max']:.3g} | {s['energy_error']:.2g} | {phases} |")
 
 
+CROSS_HEADING = "## Hi-fi cross-check against Table 3"
+
+
+def crosscheck_section(results: Path) -> str:
+    """Table 3 from the hi-fi runs at the paper's parameters (``snakemake hifi_crosscheck_all``)
+    beside the paper's, with the runs' cost and quasi-static figures."""
+    import json
+
+    import pandas as pd
+    import yaml
+    cfg = yaml.safe_load((Path(__file__).resolve().parents[1] / "config" / "config.yaml").read_text())
+    table = pd.read_csv(results / "table3.csv").set_index("case")
+    lines = [CROSS_HEADING, "",
+             "Hi-fi runs with the paper's Table 2 coverings and Sec. 4.2 interface values "
+             "(mu_rtb 0.3, mu_rtp 0.1, delta0 0.03, delta_f 0.08, alpha 2, E2/E1 0.6), passed "
+             "through eq. 13 + simplex exactly as the measured curves are "
+             "(`snakemake hifi_crosscheck_all`).", "",
+             "| case | beams / shells | E (paper) | sigma_y (paper) | K (paper) | n (paper) | run wall [s] | "
+             "steps | KE/IE (past 1/3 stroke) | energy error |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for case, paper in cfg["paper"]["table3"].items():
+        if case not in table.index:
+            continue
+        r = table.loc[case]
+        s = json.loads((results / case / "summary.json").read_text())
+        lines.append(f"| {case} | {s['n_beam_elements']} / {s['n_shell_elements']} | {r.E:.3g} ({paper['E']}) | {r.sigma_y:.3g} "
+                     f"({paper['sigma_y']}) | {r.K:.3g} ({paper['K']}) | {r.n:.3g} ({paper['n']}) | "
+                     f"{s['wall_s']:.0f} | {s['steps']} | {s['ke_ie_max']:.3f} | {s['energy_error']:.1e} |")
+    lines += ["", "Why they differ (read with the curves in the report): the hi-fi bundle starts "
+              "centred in the tube with the 1.85 mm radial clearance of 19 packed wires "
+              "(d 7.0) in d_i 10.7, so over eq. 13's linear window (u <= 1.27 mm) only the "
+              "covering bends -- the equivalent closed tube alone gives E_eff of about 4.7 MPa "
+              "at r_o 7.05 -- and E comes out 1.3-3x low; once the wires engage, their Table 1 "
+              "hardening (sigma_Y 4.5 MPa, K 850-1327 MPa) dominates and eq. 13 + simplex "
+              "returns a stiffer, later-yielding bundle (sigma_Y, K, n high).  The paper's "
+              "model reached its Table 3 with the same inputs, so our mesoscale model "
+              "misses a stiffening mechanism of the real bundle in the first millimetres "
+              "(the bundle lying on the tube wall, wire crossings/straightness, the ridges "
+              "gripping the wires) -- an open item, not tuned away.  Runs above KE/IE 0.02 "
+              "are not quasi-static by the paper's criterion (t_total 1 s, f_m 25)."]
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3, help="timed runs per profile")
     parser.add_argument("--profiles", nargs="+", default=["quick", "default"])
     parser.add_argument("--convergence", action="store_true")
+    parser.add_argument("--crosscheck", type=Path, default=None, metavar="DIR",
+                        help="only write the cross-check section from DIR (results/hifi/crosscheck)")
     args = parser.parse_args()
+    if args.crosscheck is not None:
+        text = crosscheck_section(args.crosscheck)
+        write_section(CROSS_HEADING, text)
+        print(text)
+        return
     import numba
     warm_up()                                          # JIT, not timed
     lines = [HEADING, "",
