@@ -153,3 +153,42 @@ def test_unstable_run_fails_with_diagnostics_and_writes_nothing(tmp_path):
     assert r.returncode == 3, r.stderr
     assert "step" in r.stderr and "energy" in r.stderr
     assert not any(tmp_path.iterdir())
+
+
+def test_beam_tie_carries_no_force_under_rigid_motion_and_its_moment_balances():
+    """A tape node tied to a wire point with a lever arm: a rigid rotation of wire and node
+    leaves the tie unloaded; a pulled tie exerts no net force or moment on the system."""
+    from harnesspipe.fe.contact_explicit import cohesive_ties_beam
+    from harnesspipe.fe.rotation import quat_from_rotvec
+    X = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [4.0, 0.75, 0.0]])
+    seg = np.array([[0, 1]])
+    args = dict(tie_node=np.array([2]), tie_seg=np.array([0]), tie_s=np.array([0.4]),
+                tie_anchor=np.array([0]), tie_arm=np.array([[0.0, 0.75, 0.0]]),
+                tie_axis=np.array([[1.0, 0.0, 0.0]]), tie_area=np.array([2.0]))
+    K, d0 = np.full(3, 30.0), np.full(3, 0.03)
+
+    def call(x, quat):
+        f = np.zeros((3, 6))
+        hist = [np.zeros(1), np.zeros(1), np.zeros(1)]
+        cohesive_ties_beam(x, quat, args["tie_node"], args["tie_seg"], args["tie_s"],
+                           args["tie_anchor"], args["tie_arm"], args["tie_axis"], args["tie_area"],
+                           seg, K, d0, 0.08, 2.0, *hist, f)
+        return f
+
+    theta = np.array([0.3, -0.5, 0.9])
+    q = np.zeros(4)
+    quat_from_rotvec(theta, q)
+    c, s = np.cos(np.linalg.norm(theta)), np.sin(np.linalg.norm(theta))
+    k = theta / np.linalg.norm(theta)
+    Kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    R = np.eye(3) + s * Kx + (1 - c) * Kx @ Kx
+    x = X @ R.T + np.array([1.0, 2.0, 3.0])
+    quat = np.tile(q, (3, 1))
+    assert np.abs(call(x, quat)).max() < 1e-10
+    x2 = X.copy()
+    x2[2] += [0.01, 0.02, 0.005]                     # open the tie (below delta0: elastic)
+    f = call(x2, np.tile([1.0, 0.0, 0.0, 0.0], (3, 1)))
+    assert np.abs(f[:, :3].sum(axis=0)).max() < 1e-12
+    moment = np.cross(x2, f[:, :3]).sum(axis=0) + f[:, 3:].sum(axis=0)
+    assert np.abs(moment).max() < 1e-12
+    assert np.linalg.norm(f[2, :3]) == pytest.approx(30.0 * 2.0 * np.linalg.norm([0.01, 0.02, 0.005]))

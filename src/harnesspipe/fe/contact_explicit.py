@@ -52,6 +52,7 @@ from numba import njit, prange
 
 from harnesspipe.fe.cohesive import cohesive_dissipated_energy, cohesive_traction
 from harnesspipe.fe.friction import coulomb_return_map, rate_dependent_friction
+from harnesspipe.fe.rotation import quat_to_matrix
 from harnesspipe.fe.spatial_hash import box_pairs, node_aabbs, quad_aabbs, segment_aabbs
 
 PARALLEL_COS = 0.98     # |cos| of two segments above which wire-wire uses the parallel rule
@@ -1103,6 +1104,71 @@ def cohesive_ties_seg(x, tie_node, tie_seg, tie_s, tie_n0, tie_t0, tie_off, tie_
 
 
 @njit(cache=True)
+def cohesive_ties_beam(x, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm, tie_axis,
+                       tie_area, seg, K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy,
+                       f_c):
+    """Cohesive ties (eqs. 7-10) of nodes to material points of beams with rotational dofs.
+
+    The target of tie j is ``P + R_a r0`` with ``P = (1 - s) x_0 + s x_1`` on segment
+    ``tie_seg`` at ``tie_s``, ``r0 = tie_arm`` the initial lever arm (tied node minus P, in
+    the reference configuration) and ``R_a`` the rotation of the anchor node ``tie_anchor``
+    (the nearer end node; ``quat``).  The separation ``delta = x_node - P - R_a r0`` is
+    split in the frame carried by the same rotation (normal ``R_a r0 / |r0|``, axis
+    ``R_a tie_axis``, third ``n x axis``).  The node receives ``p = -A t``; the segment nodes
+    ``-p (1 - s)``, ``-p s`` and the anchor the moment ``(R_a r0) x (-p)`` on its spins:
+    with the beam's own rotations the arm is part of the potential, so the tie is
+    conservative (the translation-only :func:`cohesive_ties_seg` is not when the arm is
+    finite and the wire turns).  Returns the number of fully debonded ties.
+    """
+    n = tie_node.shape[0]
+    R = np.empty((3, 3))
+    arm = np.empty(3)
+    nv = np.empty(3)
+    ax = np.empty(3)
+    tv = np.empty(3)
+    delta = np.empty(3)
+    tloc = np.empty(3)
+    p = np.empty(3)
+    failed = 0
+    for j in range(n):
+        e = tie_seg[j]
+        s = tie_s[j]
+        a0 = seg[e, 0]
+        a1 = seg[e, 1]
+        an = tie_anchor[j]
+        quat_to_matrix(quat[an], R)
+        for c in range(3):
+            arm[c] = R[c, 0] * tie_arm[j, 0] + R[c, 1] * tie_arm[j, 1] + R[c, 2] * tie_arm[j, 2]
+            ax[c] = R[c, 0] * tie_axis[j, 0] + R[c, 1] * tie_axis[j, 1] + R[c, 2] * tie_axis[j, 2]
+        la = math.sqrt(_dot(arm, arm))
+        for c in range(3):
+            nv[c] = arm[c] / la
+        tv[0] = nv[1] * ax[2] - nv[2] * ax[1]
+        tv[1] = nv[2] * ax[0] - nv[0] * ax[2]
+        tv[2] = nv[0] * ax[1] - nv[1] * ax[0]
+        for c in range(3):
+            p[c] = x[tie_node[j], c] - (1.0 - s) * x[a0, c] - s * x[a1, c] - arm[c]
+        delta[0] = _dot(p, nv)
+        delta[1] = _dot(p, ax)
+        delta[2] = _dot(p, tv)
+        _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
+                      tie_area, tloc)
+        if tie_D[j] >= 1.0:
+            failed += 1
+        A = tie_area[j]
+        for c in range(3):
+            p[c] = -A * (tloc[0] * nv[c] + tloc[1] * ax[c] + tloc[2] * tv[c])
+            f_c[tie_node[j], c] += p[c]
+            f_c[a0, c] -= (1.0 - s) * p[c]
+            f_c[a1, c] -= s * p[c]
+        # moment of -p at the arm about the anchor: arm x (-p)
+        f_c[an, 3] -= arm[1] * p[2] - arm[2] * p[1]
+        f_c[an, 4] -= arm[2] * p[0] - arm[0] * p[2]
+        f_c[an, 5] -= arm[0] * p[1] - arm[1] * p[0]
+    return failed
+
+
+@njit(cache=True)
 def cohesive_tie_dissipation(tie_kappa, tie_area, K, delta0, delta_mf, alpha):
     """Closed-form estimate of the energy dissipated per tie (N mm), eqs. 7-10.
 
@@ -1229,7 +1295,8 @@ def make_ties(x, tape_nodes, node_area, quads=None, quad_t=None, quad_sign=None,
         best = _best_per_node(n, pairs[ok, 0], gap[ok])
         idx = np.append(np.flatnonzero(ok), -1)      # sentinel: no candidate at all
         q_sel = np.where(best >= 0, idx[np.maximum(best, 0)], -1)
-        best_q_gap = np.where(best >= 0, gap[np.maximum(q_sel, 0)], big)
+        best_q_gap = (np.where(best >= 0, gap[np.maximum(q_sel, 0)], big) if gap.size
+                      else np.full(n, big))
         q_data = (pairs, xi, X, nq)
     if seg is not None and len(seg):
         seg = np.asarray(seg, dtype=np.int64)
@@ -1246,7 +1313,8 @@ def make_ties(x, tape_nodes, node_area, quads=None, quad_t=None, quad_sign=None,
         best = _best_per_node(n, pairs_s[ok, 0], gap_s[ok])
         idx = np.append(np.flatnonzero(ok), -1)      # sentinel: no candidate at all
         s_sel = np.where(best >= 0, idx[np.maximum(best, 0)], -1)
-        best_s_gap = np.where(best >= 0, gap_s[np.maximum(s_sel, 0)], big)
+        best_s_gap = (np.where(best >= 0, gap_s[np.maximum(s_sel, 0)], big) if gap_s.size
+                      else np.full(n, big))
     use_q = np.isfinite(best_q_gap) & (best_q_gap <= best_s_gap)
     use_s = np.isfinite(best_s_gap) & ~use_q
 

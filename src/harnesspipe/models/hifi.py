@@ -312,7 +312,13 @@ class HifiSystem:
             if target == hm.TIE_WIRES:
                 _, ties = ce.make_ties(self.x, nodes, area, seg=self.seg, seg_r=self.seg_r,
                                        tape_half_t=tape_t, tol=TIE_TOL[target])
-                kind = "seg"
+                ends = self.seg[ties["tie_seg"]]
+                s_ = ties["tie_s"]
+                P = (1.0 - s_)[:, None] * self.x[ends[:, 0]] + s_[:, None] * self.x[ends[:, 1]]
+                ties["tie_anchor"] = np.where(s_ < 0.5, ends[:, 0], ends[:, 1]).astype(np.int64)
+                ties["tie_arm"] = np.ascontiguousarray(self.x[ties["tie_node"]] - P)
+                ties["tie_axis"] = np.ascontiguousarray(ties["tie_t0"])
+                kind = "beam"
             else:
                 quads = (self.sconn[mesh.shell_part != hm.PART_TAPE] if target == hm.TIE_COVERING
                          else tape)
@@ -488,11 +494,11 @@ class HifiSystem:
                                       itf["alpha_d"], ties["tie_kappa"], ties["tie_D"],
                                       ties["tie_energy"], fc)
             else:
-                ce.cohesive_ties_seg(self.x, ties["tie_node"], ties["tie_seg"], ties["tie_s"],
-                                     ties["tie_n0"], ties["tie_t0"], ties["tie_off"],
-                                     ties["tie_area"], self.seg, self.K_coh, self.delta0,
-                                     itf["delta_f"], itf["alpha_d"], ties["tie_kappa"],
-                                     ties["tie_D"], ties["tie_energy"], fc)
+                ce.cohesive_ties_beam(self.x, self.quat, ties["tie_node"], ties["tie_seg"],
+                                      ties["tie_s"], ties["tie_anchor"], ties["tie_arm"],
+                                      ties["tie_axis"], ties["tie_area"], self.seg, self.K_coh,
+                                      self.delta0, itf["delta_f"], itf["alpha_d"],
+                                      ties["tie_kappa"], ties["tie_D"], ties["tie_energy"], fc)
 
     def external_work(self, t0, t1) -> float:
         """Work of the pins on the system: F_on_system = -force on the pin."""
