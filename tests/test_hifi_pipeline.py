@@ -11,8 +11,6 @@ import os
 import re
 import subprocess
 import sys
-import textwrap
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import h5py
@@ -20,7 +18,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import REPO, copy_project
+from conftest import copy_project
 from harnesspipe.calibrate import hifi as hcal
 from harnesspipe.stages import hifi_chain
 
