@@ -19,8 +19,7 @@ started at the committed state (where h > 0) therefore steps once to the right o
 the root and then converges monotonically and quadratically (no bracketing or
 bisection needed; a clamp to the admissible interval guards round-off).  The
 first step is the classical linearised return ``dg = f0 / (c + H)``.  Each
-iteration after the first costs one power, taken as ``exp(p log x)`` (the first
-starts from the committed state, where ``e = eps_p_old`` is known).
+iteration costs one power, taken as ``exp(p log x)``.
 """
 from __future__ import annotations
 
@@ -80,10 +79,9 @@ def return_map(q_trial, c, eps_p_old, sigma_y, K, n):
         m = 1.0 / n
         s = sa                          # unknown s = e**n, h(s) = A - K s - c s**m
         hi = A / K                      # h(hi) < 0
-        e = a                           # e(s) = s**m; at the start s = sa, e = a: no power
-        for it in range(RETURN_MAXIT):
-            if it > 0:
-                e = _pow(s, m) if s > 0.0 else 0.0
+        e = a
+        for _ in range(RETURN_MAXIT):
+            e = _pow(s, m) if s > 0.0 else 0.0
             h = A - K * s - c * e
             if abs(h) <= tol:
                 break
