@@ -145,7 +145,7 @@ def main() -> None:
         results[profile] = r
         lines.append(row(profile, r, med, walls))
     cold, cached = jit_seconds(FIRST_RUN)
-    lines += ["", f"First run in a fresh process (one thread, 0.01 s of simulated time): "
+    lines += ["", f"First run in a fresh process (one thread; quick model built and its first 2 ms integrated): "
                   f"{cold[0]:.1f} s with an empty Numba cache, {cached[0]:.1f} s from the cache."]
     if args.convergence:
         base = results.get("default") or run("default")
