@@ -25,6 +25,8 @@ from harnesspipe.stages import hifi_chain
 # --------------------------------------------------------------------------- the stand-in model
 
 FAKE_MODEL = '''
+import os
+
 import numpy as np
 import pandas as pd
 from dataclasses import dataclass, field
@@ -62,24 +64,30 @@ def run(cfg, case, interface, overrides=None):
                          "cohesive": 0.05 * F * u, "W_ext": 0.65 * F * u + 1e-3 * F,
                          "deflection_mm": u, "force_N": F})
     summary = {"wall_s": 0.01, "steps": 100, "dt": 1e-5, "f_m": 25.0, "ke_ie_max": 0.01,
-               "energy_error": 1e-4, "n_beam_elements": 10, "n_shell_elements": 0, "contact_pairs_max": 0}
+               "energy_error": 1e-4, "n_beam_elements": 10, "n_shell_elements": 0, "contact_pairs_max": 0,
+               "pid": os.getpid()}
     return FakeRun(pd.DataFrame({"deflection_mm": u, "force_N": F}), hist, summary=summary)
+
+
+def runner(cfg, case, overrides, table2):
+    """The fit stages' runner protocol (module level: picklable for a process pool)."""
+    return run(cfg, case, cfg["hifi"]["parameters"], overrides)
 '''
 
 
 @pytest.fixture(scope="module")
 def fake(tmp_path_factory):
-    path = tmp_path_factory.mktemp("fake") / "fake_hifi_model.py"
-    path.write_text(FAKE_MODEL)
-    import importlib.util
-    spec = importlib.util.spec_from_file_location("fake_hifi_model", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    folder = tmp_path_factory.mktemp("fake")
+    (folder / "fake_hifi_model.py").write_text(FAKE_MODEL)
+    sys.path.insert(0, str(folder))        # importable by name: spawned workers find it too
+    import importlib
+    yield importlib.import_module("fake_hifi_model")
+    sys.path.remove(str(folder))
+    sys.modules.pop("fake_hifi_model", None)
 
 
 def runner_of(fake):
-    return lambda cfg, case, overrides, table2: fake.run(cfg, case, cfg["hifi"]["parameters"], overrides)
+    return fake.runner
 
 
 def write_prepared(path: Path, case: str, F: np.ndarray, grid: np.ndarray) -> Path:
@@ -252,6 +260,27 @@ def test_cohesive_simplex_step_on_two_cases(tmp_path, fake):
     assert sorted(pd.read_csv(tmp_path / "cohesive" / "curve.csv")["case"].unique()) == sorted(refs)
 
 
+def test_cohesive_cases_side_by_side_match_serial(tmp_path, fake):
+    """workers=2: the two cases of each evaluation run in worker processes; same search,
+    same result, and the rejected points are still logged."""
+    u = np.linspace(0.0, 30.0, 101)
+    refs = {c: write_prepared(tmp_path / f"{c}.h5", c, fake.force(u, fake.TRUTH, "closed_tube"), u)
+            for c in ("cwb19_t2_closed", "cwb19_t2_open_halflap")}
+    model = {"cases": {c: {"covering": "closed_tube"} for c in refs}, "hifi": {}}
+    settings = {"names": ["mu_rtb"], "cases": list(refs), "window": [0.0, 20.0], "method": "bounded",
+                "bounds": [0.0, 0.6], "xatol": 1e-3, "fatol": None, "maxfev": 20,
+                "start": {"mu_rtp": 0.1, "delta0": 0.05, "delta_f": 0.1, "alpha_d": 1.0},
+                "models": {c: model for c in refs}, "set": {}}
+    serial = hifi_chain.fit_step("mu_rtb", settings, refs, tmp_path / "serial", runner=fake.runner)
+    pooled = hifi_chain.fit_step("mu_rtb", settings, refs, tmp_path / "pooled", runner=fake.runner, workers=2)
+    assert pooled["parameters"] == serial["parameters"]
+    assert pooled["parameters"]["mu_rtb"] == pytest.approx(0.3, abs=2e-3)
+    assert pooled["nfev"] == serial["nfev"] and pooled["rejected"] == serial["rejected"] > 0
+    for case in refs:
+        summary = json.loads((tmp_path / "pooled" / case / "summary.json").read_text())
+        assert summary["pid"] != os.getpid()       # the best point's run came from a worker
+
+
 def test_run_case_writes_artefacts_and_error(tmp_path, fake):
     u = np.linspace(0.0, 30.0, 101)
     ref = write_prepared(tmp_path / "r.h5", "cwb19_t2_closed", fake.force(u, fake.TRUTH, "closed_tube"), u)
@@ -305,8 +334,9 @@ def rom_fit(u, F, settings, log_path):
 
 hifi_chain._rom_fit = rom_fit
 hifi_chain._rom_simulate = lambda p, s: pd.DataFrame({{"deflection_mm": [0.0, 30.0], "force_N": [0.0, 10.0]}})
-from harnesspipe.cli import main
-sys.exit(main(sys.argv[1:]))
+if __name__ == "__main__":     # spawned workers of a fit import this file (with its patches)
+    from harnesspipe.cli import main
+    sys.exit(main(sys.argv[1:]))
 '''
 
 

@@ -213,9 +213,9 @@ rule hifi_fit:
         code=HIFI_FIT_CODE,
     wildcard_constraints:
         step="|".join(HIFI_STEPS),
-    threads: 1
+    threads: lambda wc: len(HIFI_STEPS[wc.step]["cases"])   # one process of one thread per case
     shell:
-        "NUMBA_NUM_THREADS={threads} {HP} stage hifi-fit --step {wildcards.step} "
+        "NUMBA_NUM_THREADS=1 {HP} stage hifi-fit --step {wildcards.step} --workers {threads} "
         "--settings '{params.settings}' --reference {params.refs} --coverings {input.table2} "
         "--prior {input.priors} --outdir {RES}/hifi/chain/{wildcards.step} > {log} 2>&1"
 

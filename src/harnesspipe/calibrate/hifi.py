@@ -79,22 +79,35 @@ def admissible(params: dict) -> str | None:
     return None
 
 
+def attempt(simulate, case: str, params: dict):
+    """``simulate(case, params)``, or the reason it failed (``"Type: message"``) when it
+    raises ``RuntimeError`` (which includes the explicit solver's ``ExplicitError``) or
+    ``ArithmeticError``.  Module level, so that a process pool can run it."""
+    try:
+        return simulate(case, params)
+    except (RuntimeError, ArithmeticError) as exc:
+        return f"{type(exc).__name__}: {exc}"
+
+
 class HifiObjective:
     """``error(params)`` of one or more hi-fi runs against measured means.
 
-    ``simulate(case, params) -> (u, F)``; ``targets``: list of (case, u_grid, F_mean, window);
-    the error is the sum over targets.  A failed run (``RuntimeError`` -- which includes
-    the explicit solver's ``ExplicitError`` -- or ``ArithmeticError``) or an inadmissible
-    parameter set (:func:`admissible`) is a rejected point: it scores ``penalty`` and is
-    appended to ``rejected_log`` (JSON lines: case, parameters, reason, ``key``).
-    ``n_runs`` counts the simulate calls of this process, ``n_rejected`` the rejections.
+    ``simulate(case, params) -> (u, F)`` or ``(u, F, run)``; with ``on_run`` given,
+    ``on_run(case, params, run)`` receives the third item.  ``targets``: list of
+    (case, u_grid, F_mean, window); the error is the sum over targets.  With ``pool`` (an
+    executor; ``simulate`` must then be picklable) the cases of one evaluation run side
+    by side.  A failed run (see :func:`attempt`) or an inadmissible parameter set
+    (:func:`admissible`) is a rejected point: it scores ``penalty`` and is appended to
+    ``rejected_log`` (JSON lines: case, parameters, reason, ``key``).  ``n_runs`` counts
+    the simulate calls of this process, ``n_rejected`` the rejections.
     """
 
     def __init__(self, simulate, targets, fixed: dict, names: list[str],
-                 rejected_log: Path | None = None, key: str = ""):
+                 rejected_log: Path | None = None, key: str = "", pool=None, on_run=None):
         self.simulate, self.targets, self.fixed, self.names = simulate, targets, dict(fixed), list(names)
         self.rejected_log = Path(rejected_log) if rejected_log else None
         self.key = key
+        self.pool, self.on_run = pool, on_run
         self.penalty = REJECT_FACTOR * sum(
             float(np.linalg.norm(F[window_mask(u, w)])) for _, u, F, w in targets)
         self.n_runs = 0
@@ -107,27 +120,42 @@ class HifiObjective:
         p = self.params(x)
         why = admissible(p)
         if why is not None:
-            self._reject(None, p, RejectedRun(f"inadmissible: {why}"))
+            self._reject(None, p, f"RejectedRun: inadmissible: {why}")
             return self.penalty
         total = 0.0
-        for case, u_grid, f_exp, window in self.targets:
+        for (case, u_grid, f_exp, window), out in zip(self.targets, self._outcomes(p)):
+            if isinstance(out, str):
+                self._reject(case, p, out)
+                return self.penalty
+            if self.on_run is not None and len(out) > 2:
+                self.on_run(case, p, out[2])
             try:
-                self.n_runs += 1
-                u, F = self.simulate(case, p)
-                total += curve_error(u, F, u_grid, f_exp, window)
-            except (RuntimeError, ArithmeticError) as exc:  # RejectedRun, ExplicitError, ...
-                self._reject(case, p, exc)
+                total += curve_error(out[0], out[1], u_grid, f_exp, window)
+            except RejectedRun as exc:
+                self._reject(case, p, f"RejectedRun: {exc}")
                 return self.penalty
         return total
 
-    def _reject(self, case, p, exc) -> None:
+    def _outcomes(self, p):
+        """One outcome per target: side by side in the pool, else one by one (lazily, so
+        that a rejected case stops the evaluation before the next one runs)."""
+        cases = [t[0] for t in self.targets]
+        if self.pool is None or len(cases) < 2:
+            for c in cases:
+                self.n_runs += 1
+                yield attempt(self.simulate, c, p)
+            return
+        self.n_runs += len(cases)
+        yield from self.pool.map(attempt, [self.simulate] * len(cases), cases, [p] * len(cases))
+
+    def _reject(self, case, p, reason: str) -> None:
         self.n_rejected += 1
         if self.rejected_log is None:
             return
         self.rejected_log.parent.mkdir(parents=True, exist_ok=True)
         with open(self.rejected_log, "a") as f:
             f.write(json.dumps({"case": case, "parameters": p, "key": self.key,
-                                "reason": f"{type(exc).__name__}: {exc}"}) + "\n")
+                                "reason": reason}) + "\n")
 
 
 def read_rejected(path: Path, key: str | None = None) -> list[dict]:

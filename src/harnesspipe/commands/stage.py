@@ -89,6 +89,8 @@ def register(sub) -> None:
                    help="prepared test of every case of the step")
     p.add_argument("--coverings", type=Path, default=None, help="table2.csv of the tensile stage")
     p.add_argument("--prior", type=Path, nargs="*", default=[], help="fit.json of the earlier steps")
+    p.add_argument("--workers", type=int, default=1,
+                   help="processes that run the cases of one evaluation side by side (one thread each)")
     p.add_argument("--outdir", type=Path, required=True)
     p.set_defaults(func=_hifi_fit)
 
@@ -172,7 +174,10 @@ def _hifi_fit(args) -> int:
     missing = [c for c in args.settings.get("cases", []) if c not in refs]
     if missing:
         raise InputError(f"--reference: no prepared test for {missing}")
-    fit = fit_step(args.step, args.settings, refs, args.outdir, table2=args.coverings, priors=args.prior)
+    if args.workers < 1:
+        raise InputError(f"--workers {args.workers}: expected a positive number of processes")
+    fit = fit_step(args.step, args.settings, refs, args.outdir, table2=args.coverings, priors=args.prior,
+                   workers=args.workers)
     print(json.dumps(fit, indent=2))
     return 0
 

@@ -24,10 +24,13 @@ hi-fi model itself is reached through ``runner(model_cfg, case, interface, table
 """
 from __future__ import annotations
 
+import contextlib
 import copy
 import json
+import multiprocessing
 import shutil
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -133,14 +136,16 @@ def _copy_atomic(src: Path, dst: Path) -> None:
 
 
 def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Path, *,
-             table2: Path | None = None, priors: list[Path] = (), runner=None) -> dict:
+             table2: Path | None = None, priors: list[Path] = (), runner=None, workers: int = 1) -> dict:
     """One calibration step (see module docstring).
 
     ``settings``: ``names`` (fitted parameters), ``cases``, ``window`` ([lo, hi] mm),
     ``method`` (``bounded`` | ``simplex``), ``bounds`` (bounded), ``xatol``, ``fatol``
     (simplex), ``maxfev``, ``start`` (interface values before this step: the config's
     initial guesses), ``models`` (case -> model config), ``set``.  ``priors``: fit.json
-    of the earlier steps, whose fitted parameters replace the start values.
+    of the earlier steps, whose fitted parameters replace the start values.  ``workers``
+    > 1: the cases of each evaluation run side by side in that many processes
+    (``runner`` must then be picklable).
     """
     from harnesspipe.report import plots
     from harnesspipe.stages.data import read_prepared
@@ -166,27 +171,14 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                         {"step": step, "settings": settings, "fixed": fixed, "coverings": coverings_text})
 
     runs: dict = {}
-
-    def simulate(case, params):
-        run = _run({**settings, "model": settings["models"][case]}, case, params, table2, runner)
-        runs[(case, _pkey(params))] = run
-        return run.curve["deflection_mm"].to_numpy(float), run.curve["force_N"].to_numpy(float)
-
+    simulate = CaseRun(settings, table2, runner)
     rejected_live = live / "rejected.jsonl"
     _live_rejected(rejected_live, key)
-    objective = hcal.HifiObjective(simulate, targets, fixed, names, rejected_log=rejected_live, key=key)
-    t0 = time.perf_counter()
-    if settings["method"] == "bounded":
-        if len(names) != 1:
-            raise ConfigError(f"hifi fit {step}: a bounded search fits one parameter, not {names}")
-        res = hcal.bounded_fit(objective, names[0], settings["bounds"], xatol=settings["xatol"],
-                               log_path=live / "evaluations.h5", key=key, maxfev=settings["maxfev"])
-    elif settings["method"] == "simplex":
-        res = hcal.simplex_fit(objective, {k: fixed[k] for k in names}, xatol=settings["xatol"],
-                               fatol=settings["fatol"], maxfev=settings["maxfev"],
-                               log_path=live / "evaluations.h5", key=key)
-    else:
-        raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex")
+    with _case_pool(min(workers, len(cases))) as pool:
+        objective = hcal.HifiObjective(simulate, targets, fixed, names, rejected_log=rejected_live, key=key,
+                                       pool=pool, on_run=lambda c, p, run: runs.update({(c, _pkey(p)): run}))
+        t0 = time.perf_counter()
+        res = _search(step, settings, objective, names, fixed, live, key)
     best = objective.params(res.x)
     rejected_keys = {_pkey(r["parameters"]) for r in hcal.read_rejected(rejected_live, key)}
     if not np.isfinite(res.fun) or _pkey(best) in rejected_keys:
@@ -198,7 +190,7 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
         run = runs.get((case, _pkey(best)))
         if run is None:
             reruns += 1
-            run = _run({**settings, "model": settings["models"][case]}, case, best, table2, runner)
+            run = simulate(case, best)[2]
         err = hcal.curve_error(run.curve["deflection_mm"], run.curve["force_N"], refs[case].grid,
                                refs[case].mean, window)
         per_case[case] = {"test_id": refs[case].test_id, "error_l2_window": err,
@@ -228,6 +220,50 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                                        {c: g for c, g in curve.groupby("case")},
                                        title=f"hi-fi fit {step}", window=window), outdir / "fit.png")
     return read_fit(path)
+
+
+class CaseRun:
+    """``simulate(case, params) -> (u, F, run)`` of a fit: picklable, so that a process
+    pool can run the cases of one evaluation side by side."""
+
+    def __init__(self, settings: dict, table2: Path | None, runner=None):
+        self.settings, self.table2, self.runner = settings, table2, runner
+
+    def __call__(self, case: str, params: dict):
+        run = _run({**self.settings, "model": self.settings["models"][case]}, case, params,
+                   self.table2, self.runner)
+        return run.curve["deflection_mm"].to_numpy(float), run.curve["force_N"].to_numpy(float), run
+
+
+def _one_thread() -> None:
+    import numba
+    numba.set_num_threads(1)
+
+
+@contextlib.contextmanager
+def _case_pool(workers: int):
+    """A pool of ``workers`` fresh processes of one Numba thread each (none for one worker).
+    Fresh (spawned) processes: no OpenMP state inherited through a fork."""
+    if workers < 2:
+        yield None
+        return
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_one_thread) as pool:
+        yield pool
+
+
+def _search(step, settings, objective, names, fixed, live, key):
+    """The bounded search (one parameter) or Nelder-Mead (several) of a fit step."""
+    log = live / "evaluations.h5"
+    if settings["method"] == "bounded":
+        if len(names) != 1:
+            raise ConfigError(f"hifi fit {step}: a bounded search fits one parameter, not {names}")
+        return hcal.bounded_fit(objective, names[0], settings["bounds"], xatol=settings["xatol"],
+                                log_path=log, key=key, maxfev=settings["maxfev"])
+    if settings["method"] == "simplex":
+        return hcal.simplex_fit(objective, {k: fixed[k] for k in names}, xatol=settings["xatol"],
+                                fatol=settings["fatol"], maxfev=settings["maxfev"], log_path=log, key=key)
+    raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex")
 
 
 def _pkey(params: dict) -> tuple:
