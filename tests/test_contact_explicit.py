@@ -382,6 +382,76 @@ def test_cohesive_compression_no_damage_and_rigid_rotation_free():
     assert fc[1, :3] == pytest.approx(0.5 * fc[0, :3])               # s = 1/3 weights
 
 
+def _rotation(axis, angle):
+    k = np.asarray(axis, float) / np.linalg.norm(axis)
+    Kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(angle) * Kx + (1 - math.cos(angle)) * Kx @ Kx
+
+
+def _loop_work(forces_at, n=4000):
+    """Work of the tie forces around a closed path theta = 0..2 pi (trapezoid rule):
+    ``forces_at(theta) -> (f (n, 6), x (n, 3), rotation angle about the fixed axis)``."""
+    th = np.linspace(0.0, 2.0 * np.pi, n + 1)
+    W = scale = 0.0
+    f0, x0, a0, axis = forces_at(th[0])
+    for t in th[1:]:
+        f1, x1, a1, _ = forces_at(t)
+        dW = 0.5 * np.sum((f0[:, :3] + f1[:, :3]) * (x1 - x0))
+        dW += 0.5 * (f0[:, 3:] + f1[:, 3:]).sum(axis=0) @ (axis * (a1 - a0))
+        W += dW
+        scale += abs(dW)
+        f0, x0, a0 = f1, x1, a1
+    return W, scale
+
+
+def test_damaged_ties_are_conservative_when_closing_differs_from_opening():
+    """With damage frozen (0 < D < 1, kappa above the path), a tie in normal compression
+    (undamaged penalty) and shear (damaged) has a traction not parallel to its separation.
+    Its forces must still derive from its energy: zero work around a closed path on which
+    the target turns (quad frame, or the wire anchor's rotation) and the tied node moves."""
+    from harnesspipe.fe.contact_explicit import cohesive_ties_beam
+    from harnesspipe.fe.rotation import quat_from_rotvec
+    axis = np.array([1.0, 0.3, 0.2])
+    x0, quads, tq = _quad_tie()
+    centre = x0[:4].mean(axis=0)
+
+    def quad_forces(th):
+        a = 0.3 * math.sin(th + 0.5)
+        R = _rotation(axis, a)
+        x = (x0 - centre) @ R.T + centre
+        x[4] += [0.02 * math.cos(th), 0.02 * math.sin(th), -0.03]     # shear + closing, fixed axes
+        tq["tie_D"][:] = 0.5
+        tq["tie_kappa"][:] = 0.07
+        return _run_quad_tie(x, quads, tq)[1], x, a, axis / np.linalg.norm(axis)
+
+    W, scale = _loop_work(quad_forces)
+    assert tq["tie_D"][0] == 0.5 and scale > 1e-3
+    assert abs(W) < 1e-6 * scale
+
+    X = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [4.0, 0.75, 0.0]])
+    hist = [np.full(1, 0.07), np.full(1, 0.5), np.zeros(1)]
+    k = axis / np.linalg.norm(axis)
+
+    def beam_forces(th):
+        a = 0.3 * math.sin(th + 0.5)
+        R = _rotation(axis, a)
+        x = X @ R.T
+        x[2] += [0.02 * math.cos(th), -0.03, 0.02 * math.sin(th)]     # closing: -y, fixed axes
+        q = np.zeros(4)
+        quat_from_rotvec(a * k, q)
+        f = np.zeros((3, 6))
+        hist[0][:] = 0.07
+        hist[1][:] = 0.5
+        cohesive_ties_beam(x, np.tile(q, (3, 1)), np.array([2]), np.array([0]), np.array([0.4]),
+                           np.array([0]), np.array([[0.0, 0.75, 0.0]]), np.array([[1.0, 0.0, 0.0]]),
+                           np.array([2.0]), np.array([[0, 1]]), K, D0, DF, ALPHA, *hist, f)
+        return f, x, a, k
+
+    W, scale = _loop_work(beam_forces)
+    assert hist[1][0] == 0.5 and scale > 1e-3
+    assert abs(W) < 1e-6 * scale
+
+
 # ------------------------------------------------------------- early rejects (candidates)
 def test_far_candidates_change_nothing():
     """All-pairs candidate lists (mostly far apart: rejected early) give the same forces and

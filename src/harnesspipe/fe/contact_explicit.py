@@ -915,6 +915,7 @@ def cohesive_ties_quad(x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_are
     """
     n = tie_node.shape[0]
     pf = np.empty((n, 3))
+    lever = np.empty((n, 3))
     n_chunks = (n + CHUNK - 1) // CHUNK
     for ch in prange(n_chunks):
         scr = np.zeros((5, 3))      # per-task scratch
@@ -930,6 +931,9 @@ def cohesive_ties_quad(x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_are
             d0 = x[tie_node[j], 0] - X[0]
             d1 = x[tie_node[j], 1] - X[1]
             d2 = x[tie_node[j], 2] - X[2]
+            lever[j, 0] = d0
+            lever[j, 1] = d1
+            lever[j, 2] = d2
             n0 = sg * nq[0]
             n1 = sg * nq[1]
             n2 = sg * nq[2]
@@ -963,24 +967,24 @@ def cohesive_ties_quad(x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_are
             f_c[quads[q, 1], c] -= N1 * f
             f_c[quads[q, 2], c] -= N2 * f
             f_c[quads[q, 3], c] -= N3 * f
-        _arm_forces(x, quads, q, xi, eta, tie_sign[j] * tie_off[j, 0], tie_off[j, 1], pf[j], f_c)
+        _frame_forces(x, quads, q, xi, eta, lever[j], pf[j], f_c)
     return n_failed
 
 
 @njit(cache=True)
-def _arm_forces(x, quads, q, xi, eta, a_n, a_s, p_node, f_c):
-    """Forces on the quad nodes from the tie's lever arm (conservative ties).
+def _frame_forces(x, quads, q, xi, eta, L, p_node, f_c):
+    """Forces on the quad nodes from the turning of the tie's frame (conservative ties).
 
-    The tie acts at the offset point ``X + a_n n + a_s e1`` of the quad (``a_n``: the
-    signed normal offset, tape mid-surface to covering mid-surface; ``a_s``: along the
-    unit tangent e1 = X_xi/|X_xi|), and n and e1 turn with the quad.  For a potential
-    U(x_node - X - a_n n - a_s e1) the quad nodes receive, beyond ``-p N_i``, the terms
-    ``-(dn/dx_i)^T p a_n - (de1/dx_i)^T p a_s`` (``p`` the force on the tied node) with
-    ``dn/dx_i = P (N_i,xi [X_eta]x^T ... )/|c|``, c = X_xi x X_eta, P = I - n n^T, and
-    ``de1/dx_i = (I - e1 e1^T) N_i,xi / |X_xi|``.  Without them a tie with a lever arm
-    is not conservative and creates energy as the covering rotates.  The arm along the
-    third axis t = n x e1 is neglected (make_ties puts the tape node on the normal, so
-    that offset vanishes to round-off).
+    The tie's energy U(delta), delta = frame^T (x_node - X) - off, depends on the quad's
+    frame (n, e1 = X_xi/|X_xi|, t = n x e1) through its rotation phi: dU/dphi = M = f x L
+    with ``f = -p`` (``p`` the force on the tied node) and the lever ``L = x_node - X``
+    (the tie's offset, tape mid-surface to covering mid-surface, plus the separation:
+    the separation part matters once damage treats opening and closing apart).  With
+    ``phi.e1 = -dn.t``, ``phi.t = dn.e1``, ``phi.n = de1.t`` the quad nodes receive,
+    beyond ``-p N_i``, ``(dn/dx_i)^T (M_e1 t - M_t e1) - (de1/dx_i)^T t M_n``, where
+    ``dn/dx_i = P (N_i,xi [X_eta]x^T - N_i,eta [X_xi]x^T)/|c|``, c = X_xi x X_eta,
+    P = I - n n^T, and ``de1/dx_i = (I - e1 e1^T) N_i,xi / |X_xi|``.  Without them the
+    tie is not conservative and creates energy as the covering turns.
     """
     Xx0 = Xx1 = Xx2 = 0.0
     Xe0 = Xe1 = Xe2 = 0.0
@@ -1003,12 +1007,17 @@ def _arm_forces(x, quads, q, xi, eta, a_n, a_s, p_node, f_c):
     n0, n1, n2 = c0 / cn, c1 / cn, c2 / cn
     lx = math.sqrt(Xx0 * Xx0 + Xx1 * Xx1 + Xx2 * Xx2)
     e0, e1_, e2 = Xx0 / lx, Xx1 / lx, Xx2 / lx
-    # f = force the quad receives at the arm end = -p_node
+    t0, t1, t2 = n1 * e2 - n2 * e1_, n2 * e0 - n0 * e2, n0 * e1_ - n1 * e0
+    # M = f x L, f = -p_node the force the quad receives
     f0, f1, f2 = -p_node[0], -p_node[1], -p_node[2]
-    fn = f0 * n0 + f1 * n1 + f2 * n2
-    g0, g1, g2 = f0 - fn * n0, f1 - fn * n1, f2 - fn * n2          # P f
-    fe = f0 * e0 + f1 * e1_ + f2 * e2
-    h0, h1, h2 = f0 - fe * e0, f1 - fe * e1_, f2 - fe * e2        # (I - e1 e1^T) f
+    M0 = f1 * L[2] - f2 * L[1]
+    M1 = f2 * L[0] - f0 * L[2]
+    M2 = f0 * L[1] - f1 * L[0]
+    Me = M0 * e0 + M1 * e1_ + M2 * e2
+    Mt = M0 * t0 + M1 * t1 + M2 * t2
+    Mn = M0 * n0 + M1 * n1 + M2 * n2
+    g0, g1, g2 = Me * t0 - Mt * e0, Me * t1 - Mt * e1_, Me * t2 - Mt * e2    # (dn)^T acts on g
+    h0, h1, h2 = -Mn * t0, -Mn * t1, -Mn * t2                                # (de1)^T acts on h
     for m in range(4):
         sx = -1.0 if (m == 0 or m == 3) else 1.0
         se = -1.0 if (m == 0 or m == 1) else 1.0
@@ -1019,9 +1028,9 @@ def _arm_forces(x, quads, q, xi, eta, a_n, a_s, p_node, f_c):
         r1 = (dx * (Xe2 * g0 - Xe0 * g2) - de * (Xx2 * g0 - Xx0 * g2)) / cn
         r2 = (dx * (Xe0 * g1 - Xe1 * g0) - de * (Xx0 * g1 - Xx1 * g0)) / cn
         nd = quads[q, m]
-        f_c[nd, 0] += a_n * r0 + a_s * dx * h0 / lx
-        f_c[nd, 1] += a_n * r1 + a_s * dx * h1 / lx
-        f_c[nd, 2] += a_n * r2 + a_s * dx * h2 / lx
+        f_c[nd, 0] += r0 + dx * h0 / lx
+        f_c[nd, 1] += r1 + dx * h1 / lx
+        f_c[nd, 2] += r2 + dx * h2 / lx
 
 
 @njit(cache=True)
@@ -1055,6 +1064,7 @@ def cohesive_ties_seg(x, tie_node, tie_seg, tie_s, tie_n0, tie_t0, tie_off, tie_
     """
     n = tie_node.shape[0]
     pf = np.empty((n, 3))
+    lever = np.empty((n, 3))
     n_chunks = (n + CHUNK - 1) // CHUNK
     for ch in prange(n_chunks):
         scr = np.zeros((4, 3))      # per-task scratch
@@ -1115,10 +1125,12 @@ def cohesive_ties_beam(x, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm, t
     (the nearer end node; ``quat``).  The separation ``delta = x_node - P - R_a r0`` is
     split in the frame carried by the same rotation (normal ``R_a r0 / |r0|``, axis
     ``R_a tie_axis``, third ``n x axis``).  The node receives ``p = -A t``; the segment nodes
-    ``-p (1 - s)``, ``-p s`` and the anchor the moment ``(R_a r0) x (-p)`` on its spins:
-    with the beam's own rotations the arm is part of the potential, so the tie is
-    conservative (the translation-only :func:`cohesive_ties_seg` is not when the arm is
-    finite and the wire turns).  Returns the number of fully debonded ties.
+    ``-p (1 - s)``, ``-p s`` and the anchor the moment ``(x_node - P) x (-p)`` on its spins,
+    the derivative of the tie's energy with respect to the anchor rotation, which turns
+    both the arm and the frame: the tie is conservative with the beam's own rotations,
+    also once damage treats opening and closing apart (the translation-only
+    :func:`cohesive_ties_seg` is not when the arm is finite and the wire turns).
+    Returns the number of fully debonded ties.
     """
     n = tie_node.shape[0]
     R = np.empty((3, 3))
@@ -1157,11 +1169,14 @@ def cohesive_ties_beam(x, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm, t
             failed += 1
         A = tie_area[j]
         for c in range(3):
+            arm[c] += p[c]          # lever x_node - P: the arm and the separation
             p[c] = -A * (tloc[0] * nv[c] + tloc[1] * ax[c] + tloc[2] * tv[c])
             f_c[tie_node[j], c] += p[c]
             f_c[a0, c] -= (1.0 - s) * p[c]
             f_c[a1, c] -= s * p[c]
-        # moment of -p at the arm about the anchor: arm x (-p)
+        # moment of -p about the anchor's spins: (x_node - P) x (-p); the part arm x (-p)
+        # from the turning target, the part delta x (-p) from the turning frame (zero when the
+        # traction is parallel to delta, not once damage treats opening and closing apart)
         f_c[an, 3] -= arm[1] * p[2] - arm[2] * p[1]
         f_c[an, 4] -= arm[2] * p[0] - arm[0] * p[2]
         f_c[an, 5] -= arm[0] * p[1] - arm[1] * p[0]
