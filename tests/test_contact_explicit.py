@@ -7,7 +7,7 @@ import pytest
 from harnesspipe.fe.cohesive import cohesive_dissipated_energy
 from harnesspipe.fe.contact_explicit import (
     beam_beam_contact, cohesive_tie_dissipation, cohesive_ties_quad, cohesive_ties_seg,
-    make_ties, new_slot_history, node_cylinder_contact, node_facet_contact)
+    WW_POINTS, make_ties, new_slot_history, node_cylinder_contact, node_facet_contact)
 from harnesspipe.fe.spatial_hash import box_pairs, node_aabbs, quad_aabbs, segment_aabbs
 
 R_W = 0.65
@@ -70,7 +70,7 @@ def test_crossed_wires_static_load_and_no_tunnelling():
     # (1) B pressed on A with F (F/2 per node), damped explicit loop -> penetration F/k
     x = np.array([[-5.0, 0, 0], [5, 0, 0], [0, -5, 2 * R_W + 0.1], [0, 5, 2 * R_W + 0.1]])
     v = _z(4)
-    hp, hf = new_slot_history(2, 8, 2)
+    hp, hf = new_slot_history(2, 8, WW_POINTS)
     c = 0.5 * 2 * math.sqrt(k_n * m)
     for _ in range(3000):
         x[2:] += dt * v[2:, :3]
@@ -88,7 +88,7 @@ def test_crossed_wires_static_load_and_no_tunnelling():
     v = _z(4)
     v0 = 0.1 / dt
     v[2:, 2] = -v0
-    hp, hf = new_slot_history(2, 8, 2)
+    hp, hf = new_slot_history(2, 8, WW_POINTS)
     zmin = np.inf
     for _ in range(400):
         x[2:] += dt * v[2:, :3]
@@ -107,7 +107,7 @@ def test_parallel_wires_equal_split_no_jitter():
     x = np.array([[0.0, 0, 0], [8, 0, 0], [0, 0, 2 * R_W - pen], [8, 0, 2 * R_W - pen]])
     seg = np.array([[0, 1], [2, 3]])
     body = np.array([0, 1])
-    hp, hf = new_slot_history(2, 8, 2)
+    hp, hf = new_slot_history(2, 8, WW_POINTS)
     ref = None
     rng = np.random.default_rng(0)
     for trial in range(20):
@@ -131,12 +131,47 @@ def test_parallel_wires_equal_split_no_jitter():
         bd = np.array([0] * 4 + [1] * 4)
         lo, hi = segment_aabbs(xx, sg, np.full(8, R_W), 0.1)
         pairs = box_pairs(lo, hi, lo, hi, 8.0, True)
-        hp, hf = new_slot_history(8, 8, 2)
+        hp, hf = new_slot_history(8, 8, WW_POINTS)
         _, fn, _ = _bb(xx, _z(10), sg, pairs, bd, hp, hf, k_n=k_n)
         overlap = 32.0 - shift
         assert fn[5:, 2].sum() == pytest.approx(k_n * pen * overlap / 8.0, rel=1e-12)
         if shift == 0.0:
             assert np.allclose(fn[6:9, 2], k_n * pen) and np.allclose(fn[[5, 9], 2], k_n * pen / 2)
+
+
+def test_wire_wire_energy_continuous_between_crossing_and_parallel_rules():
+    """A penetrating segment turning (in a plane parallel to its partner's) through the
+    angles where the crossing rule hands over to the parallel rule, while its penetration
+    varies: the work of the contact forces around the closed path is that of a potential.
+    (A sharp switch at one angle returned 49 % of the path's work as created energy.)"""
+    def path(th, phi_mid, dphi):
+        phi = math.radians(phi_mid + dphi * math.cos(th))
+        pen = 0.05 + 0.03 * math.sin(th)
+        d = 4.0 * np.array([math.cos(phi), math.sin(phi), 0.0])
+        cb = np.array([5.5, 0.3, 2 * R_W - pen])
+        return np.array([[0, 0, 0], [8.0, 0, 0], cb - d, cb + d])
+
+    def loop_work(phi_mid, dphi, n=4000):
+        W = scale = 0.0
+        x0 = path(0.0, phi_mid, dphi)
+        f0 = None
+        for th in np.linspace(0.0, 2 * np.pi, n + 1):
+            x = path(th, phi_mid, dphi)
+            hp, hf = new_slot_history(2, 8, WW_POINTS)
+            f = _bb(x, _z(4), np.array([[0, 1], [2, 3]]), np.array([[0, 1]]), np.array([0, 1]),
+                    hp, hf)[1][:, :3]
+            if f0 is not None:
+                dW = 0.5 * np.sum((f0 + f) * (x - x0))
+                W += dW
+                scale += abs(dW)
+            x0, f0 = x, f
+        return W, scale
+
+    for phi_mid, dphi, tol in ((8.5, 5.0, 5e-3),     # |cos| 0.973..0.9986: through the blend
+                               (20.0, 5.0, 1e-12)):  # crossing rule only: exact potential
+        W, scale = loop_work(phi_mid, dphi)
+        assert scale > 0.1
+        assert abs(W) < tol * scale
 
 
 def test_wire_wire_friction_eq6_history_across_rehash():
@@ -149,7 +184,7 @@ def test_wire_wire_friction_eq6_history_across_rehash():
         v = _z(4)
         v[2:, 0] = V
         seg = np.array([[0, 1], [2, 3]])
-        hp, hf = new_slot_history(2, 4, 2)
+        hp, hf = new_slot_history(2, 4, WW_POINTS)
         for step in range(300):
             # (positions frozen: the slip comes from the velocities, the overlap stays 8 mm)
             pairs = np.array([[0, 1]]) if step % 2 else np.array([[1, 0], [0, 0]])
@@ -478,7 +513,7 @@ def test_far_candidates_change_nothing():
     runs = []
     for tight in (True, False):
         x = x0.copy()
-        hw = new_slot_history(len(seg), 8, points=2)
+        hw = new_slot_history(len(seg), 8, points=WW_POINTS)
         hf = new_slot_history(len(nodes), 8)
         rng = np.random.default_rng(1)
         out = []

@@ -55,7 +55,9 @@ from harnesspipe.fe.friction import coulomb_return_map, rate_dependent_friction
 from harnesspipe.fe.rotation import quat_to_matrix
 from harnesspipe.fe.spatial_hash import box_pairs, node_aabbs, quad_aabbs, segment_aabbs
 
-PARALLEL_COS = 0.98     # |cos| of two segments above which wire-wire uses the parallel rule
+PARALLEL_COS = (0.98, 0.995)   # |cos| of two segments: crossing rule below, parallel rule above,
+                               # both blended in between (see _segment_points)
+WW_POINTS = 3           # wire-wire contact points per pair: crossing point, two parallel ends
 EDGE_TOL = 0.05         # half width (in xi) of the partition-of-unity band at quad edges
 DEFAULT_MAXS = 8
 CHUNK = 64              # items per parallel task (scratch arrays are allocated per task)
@@ -66,8 +68,8 @@ REJECT_TOL = 1e-9       # relative slack of the early distance rejects (round-of
 def new_slot_history(n_owner, maxs=DEFAULT_MAXS, points=1):
     """Empty slot history: ``hist_partner`` (n_owner, maxs) = -1 and ``hist_ft``.
 
-    ``points=2`` for wire-wire (``hist_ft`` (n_seg, maxs, 2, 3)); ``points=1`` for
-    node-facet (``hist_ft`` (n_nodes_list, maxs, 3)).
+    ``points=WW_POINTS`` for wire-wire (``hist_ft`` (n_seg, maxs, WW_POINTS, 3));
+    ``points=1`` for node-facet (``hist_ft`` (n_nodes_list, maxs, 3)).
     """
     hp = -np.ones((n_owner, maxs), dtype=np.int64)
     if points == 1:
@@ -275,15 +277,23 @@ def _ramp(u):
 
 # ---------------------------------------------------------------- (a) wire-wire contact
 @njit(cache=True)
-def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out):
-    """Contact points of segments a, b: returns their number (1 crossing, 2 parallel, 0 none).
+def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out, blend):
+    """Contact points of segments a, b (up to ``WW_POINTS``); returns the bit mask of the
+    points present (0: none).  ``w_out`` are the weights of each rule alone; the blend
+    factor beta and its derivative d beta / d|cos| go to ``blend``.
 
-    Crossing (|cos| <= PARALLEL_COS): the closest points of the two segments (clamped),
-    weight 1, halved at an end node shared with another segment (that segment finds the
-    same point).  Parallel: the two ends of the common part of the segments projected on
-    a's axis, each paired with its closest point on b, weight  L_overlap / (L_a + L_b)
+    Point 0, crossing rule: the closest points of the two segments (clamped), weight 1,
+    halved at an end node shared with another segment (that segment finds the same point).
+    Points 1, 2, parallel rule: the two ends of the common part of the segments projected
+    on a's axis, each paired with its closest point on b, weight  L_overlap / (L_a + L_b)
     each (the pair carries  k_n * mean penetration * L_overlap / L_mean; for equal aligned
     chains every node-to-node line carries k_n * penetration).
+    The crossing rule holds for |cos| <= PARALLEL_COS[0], the parallel rule for |cos| >=
+    PARALLEL_COS[1]; in between the pair's energy is ``(1 - beta) U_cross + beta U_par``
+    with beta a smooth step in |cos|.  A sharp switch would make the energy jump whenever
+    a penetrating pair turns through the threshold (the closest point of the crossing rule
+    and the ends of the parallel rule see different penetrations): measured as wire-wire
+    contact creating energy in kicks in bent twisted-wire bundles.
     """
     a0 = seg[a, 0]
     a1 = seg[a, 1]
@@ -306,7 +316,19 @@ def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out):
     La = math.sqrt(A)
     Lb = math.sqrt(E)
     cosab = abs(B) / (La * Lb)
-    if cosab <= PARALLEL_COS:
+    c0, c1 = PARALLEL_COS
+    if cosab <= c0:
+        blend[0] = 0.0
+        blend[1] = 0.0
+    elif cosab >= c1:
+        blend[0] = 1.0
+        blend[1] = 0.0
+    else:
+        t = (cosab - c0) / (c1 - c0)
+        blend[0] = t * t * (3.0 - 2.0 * t)
+        blend[1] = 6.0 * t * (1.0 - t) / (c1 - c0)
+    mask = 0
+    if blend[0] < 1.0:
         denom = A * E - B * B
         s = min(1.0, max(0.0, (B * F - C * E) / denom))
         u = (B * s + F) / E
@@ -324,25 +346,47 @@ def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out):
         s_out[0] = s
         u_out[0] = u
         w_out[0] = w
-        return 1
-    # parallel: common part on a's axis
-    sb0 = -C / A                      # b0 on a: (b0 - a0).da / A
-    sb1 = (B - C) / A                 # b1 on a
-    lo = max(0.0, min(sb0, sb1))
-    hi = min(1.0, max(sb0, sb1))
-    if hi < lo:
-        return 0
-    w = (hi - lo) * La / (La + Lb)
-    if w <= 0.0:
-        return 0
-    for k in range(2):
-        s = lo if k == 0 else hi
-        # point of a at s, projected on b
-        u = (F + s * B) / E
-        s_out[k] = s
-        u_out[k] = min(1.0, max(0.0, u))
-        w_out[k] = w
-    return 2
+        mask = 1
+    if blend[0] > 0.0:
+        # parallel: common part on a's axis
+        sb0 = -C / A                      # b0 on a: (b0 - a0).da / A
+        sb1 = (B - C) / A                 # b1 on a
+        lo = max(0.0, min(sb0, sb1))
+        hi = min(1.0, max(sb0, sb1))
+        w = (hi - lo) * La / (La + Lb) if hi >= lo else 0.0
+        if w > 0.0:
+            for k in range(1, 3):
+                s = lo if k == 1 else hi
+                u = (F + s * B) / E           # point of a at s, projected on b
+                s_out[k] = s
+                u_out[k] = min(1.0, max(0.0, u))
+                w_out[k] = w
+            mask |= 6
+    return mask
+
+
+@njit(cache=True)
+def _blend_forces(x, a0, a1, b0, b1, dUdcos, f_n):
+    """Forces ``-dU/dcos * d|cos|/dx`` of the blend (``dUdcos = (U_par - U_cross) beta'``):
+    the part of the pair's energy gradient that comes from beta turning with the segments."""
+    da = np.empty(3)
+    db = np.empty(3)
+    for c in range(3):
+        da[c] = x[a1, c] - x[a0, c]
+        db[c] = x[b1, c] - x[b0, c]
+    A = _dot(da, da)
+    E = _dot(db, db)
+    B = _dot(da, db)
+    LL = math.sqrt(A * E)
+    cs = abs(B) / LL
+    sg = 1.0 if B >= 0.0 else -1.0
+    for c in range(3):
+        ga = sg * db[c] / LL - cs * da[c] / A          # d|cos| / d(da)
+        gb = sg * da[c] / LL - cs * db[c] / E          # d|cos| / d(db)
+        f_n[a1, c] -= dUdcos * ga
+        f_n[a0, c] += dUdcos * ga
+        f_n[b1, c] -= dUdcos * gb
+        f_n[b0, c] += dUdcos * gb
 
 
 @njit(cache=True, parallel=True)
@@ -361,16 +405,17 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
     k_t : tangential (stick) penalty (N/mm), 0 disables friction.
     mu_s, mu_k, d_c : eq. 6 (d_c in s of PHYSICAL time).
     dt : solver step; time_scale : physical / simulated duration (dt_phys = dt time_scale).
-    hist_partner : (n_seg, MAXS) int64; hist_ft : (n_seg, MAXS, 2, 3) friction history
-        per (owner, partner slot, contact point 0/1), in place (``new_slot_history(n_seg,
-        maxs, points=2)``).
+    hist_partner : (n_seg, MAXS) int64; hist_ft : (n_seg, MAXS, WW_POINTS, 3) friction
+        history per (owner, partner slot, contact point), in place (``new_slot_history(n_seg,
+        maxs, points=WW_POINTS)``).
     f_n, f_t : (n_nodes, 3+) outputs, normal and friction forces ADDED.
 
     Geometry: gap ``|p_a - p_b| - r_a - r_b`` at the contact points of
     :func:`_segment_points` (closest points for crossing segments; for nearly parallel
-    segments, |cos| > PARALLEL_COS, the two ends of their common part, node-to-segment
-    like, which is well posed and continuous under tangential motion).  Point forces go
-    to the end nodes by the linear shape functions ``(1 - s, s)``.
+    segments the two ends of their common part, node-to-segment like, which is well posed
+    and continuous under tangential motion; blended in between, with the blend's own
+    energy gradient).  Point forces go to the end nodes by the linear shape functions
+    ``(1 - s, s)``.
 
     Returns the number of pairs with at least one active contact point.
     """
@@ -400,21 +445,22 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
             idx[j] = p
             j += 1
     # phase 2: forces and friction of the touching pairs only
-    ps = np.empty((n_act, 2))
-    pu = np.empty((n_act, 2))
-    pfn = np.empty((n_act, 2, 3))     # weighted normal force on a's point
-    pft = np.empty((n_act, 2, 3))     # weighted friction force on a's point
-    hnew = np.empty((n_act, 2, 3))    # new friction history (per unit weight)
+    ps = np.empty((n_act, WW_POINTS))
+    pu = np.empty((n_act, WW_POINTS))
+    pfn = np.empty((n_act, WW_POINTS, 3))     # weighted normal force on a's point
+    pft = np.empty((n_act, WW_POINTS, 3))     # weighted friction force on a's point
+    hnew = np.empty((n_act, WW_POINTS, 3))    # new friction history (per unit weight)
+    pdu = np.empty(n_act)                     # (U_par - U_cross) beta' of the blend
     dt_phys = dt * time_scale
     n_chunks = (n_act + CHUNK - 1) // CHUNK
     if n_chunks <= SERIAL_MAX_CHUNKS:
         _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k, d_c, dt,
-                   dt_phys, hist_partner, hist_ft, 0, n_act, ps, pu, pfn, pft, hnew)
+                   dt_phys, hist_partner, hist_ft, 0, n_act, ps, pu, pfn, pft, hnew, pdu)
     else:
         for ch in prange(n_chunks):
             _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k, d_c,
                        dt, dt_phys, hist_partner, hist_ft, ch * CHUNK,
-                       min(n_act, (ch + 1) * CHUNK), ps, pu, pfn, pft, hnew)
+                       min(n_act, (ch + 1) * CHUNK), ps, pu, pfn, pft, hnew, pdu)
     # serial: commit history, scatter forces (in pair order)
     for i in range(hist_partner.shape[0]):
         for s in range(hist_partner.shape[1]):
@@ -428,14 +474,16 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
         slot = _free_slot(hist_partner, a)
         if slot >= 0:
             hist_partner[a, slot] = b
-            for k in range(2):
+            for k in range(WW_POINTS):
                 for c in range(3):
                     hist_ft[a, slot, k, c] = hnew[j, k, c]
         a0 = seg[a, 0]
         a1 = seg[a, 1]
         b0 = seg[b, 0]
         b1 = seg[b, 1]
-        for k in range(2):
+        if pdu[j] != 0.0:
+            _blend_forces(x, a0, a1, b0, b1, pdu[j], f_n)
+        for k in range(WW_POINTS):
             if not (flag[p] >> k) & 1:
                 continue
             s = ps[j, k]
@@ -473,9 +521,10 @@ def _boxes_apart(x, a0, a1, b0, b1, r):
 @njit(cache=True)
 def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag):
     """flag[p] for pairs p0..p1-1: bit k set if contact point k of the pair penetrates."""
-    sv = np.empty(2)
-    uv = np.empty(2)
-    wv = np.empty(2)
+    sv = np.empty(WW_POINTS)
+    uv = np.empty(WW_POINTS)
+    wv = np.empty(WW_POINTS)
+    bl = np.empty(2)
     for p in range(p0, p1):
         flag[p] = 0
         a = pairs[p, 0]
@@ -491,9 +540,11 @@ def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag):
         rr = seg_r[a] + seg_r[b]
         if _boxes_apart(x, a0, a1, b0, b1, rr):     # early reject (most candidates)
             continue
-        m = _segment_points(x, seg, a, b, valence, sv, uv, wv)
+        m = _segment_points(x, seg, a, b, valence, sv, uv, wv, bl)
         f = 0
-        for k in range(m):
+        for k in range(WW_POINTS):
+            if not (m >> k) & 1:
+                continue
             s = sv[k]
             u = uv[k]
             dist2 = 0.0
@@ -507,13 +558,15 @@ def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag):
 
 @njit(cache=True)
 def _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k, d_c, dt,
-               dt_phys, hist_partner, hist_ft, j0, j1, ps, pu, pfn, pft, hnew):
-    """Normal and friction forces of the touching pairs idx[j0:j1] (compact arrays by j)."""
+               dt_phys, hist_partner, hist_ft, j0, j1, ps, pu, pfn, pft, hnew, pdu):
+    """Normal and friction forces of the touching pairs idx[j0:j1] (compact arrays by j);
+    ``pdu[j]``: (U_par - U_cross) beta' for :func:`_blend_forces`."""
     scr = np.zeros((4, 3))
-    wv = np.empty(2)
+    wv = np.empty(WW_POINTS)
+    bl = np.empty(2)
     for j in range(j0, j1):
         p = idx[j]
-        for k in range(2):
+        for k in range(WW_POINTS):
             for c in range(3):
                 pfn[j, k, c] = 0.0
                 pft[j, k, c] = 0.0
@@ -522,7 +575,10 @@ def _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k
         b = pairs[p, 1]
         if a > b:
             a, b = b, a
-        m = _segment_points(x, seg, a, b, valence, ps[j], pu[j], wv)
+        m = _segment_points(x, seg, a, b, valence, ps[j], pu[j], wv, bl)
+        beta = bl[0]
+        u_cross = 0.0
+        u_par = 0.0
         slot = -2                        # looked up at the first active point
         a0 = seg[a, 0]
         a1 = seg[a, 1]
@@ -533,7 +589,7 @@ def _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k
         dg = scr[1]
         ds = scr[2]
         nv = scr[3]
-        for k in range(m):
+        for k in range(WW_POINTS):
             if not (flag[p] >> k) & 1:
                 continue
             s = ps[j, k]
@@ -554,7 +610,12 @@ def _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k
                     dg[c] = x[a1, c] - x[a0, c]
                 _any_perpendicular(dg, nv)
             pn = -k_n * gap
-            w = wv[k]
+            if k == 0:
+                u_cross += 0.5 * wv[k] * pn * (-gap)
+                w = (1.0 - beta) * wv[k]
+            else:
+                u_par += 0.5 * wv[k] * pn * (-gap)
+                w = beta * wv[k]
             for c in range(3):
                 pfn[j, k, c] = w * pn * nv[c]
             if k_t <= 0.0:
@@ -572,9 +633,15 @@ def _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k
             rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew[j, k], ds)
             for c in range(3):
                 pft[j, k, c] = -w * hnew[j, k, c]
+        pdu[j] = (u_par - u_cross) * bl[1]
+        # a rule not in use hands its points the other's stick force (no loss at a switch)
         if m == 1:
             for c in range(3):
                 hnew[j, 1, c] = hnew[j, 0, c]
+                hnew[j, 2, c] = hnew[j, 0, c]
+        elif m == 6:
+            for c in range(3):
+                hnew[j, 0, c] = 0.5 * (hnew[j, 1, c] + hnew[j, 2, c])
 
 
 # -------------------------------------------------------- (b) nodes on rigid cylinders

@@ -194,7 +194,7 @@ class HifiSystem:
         mesh, itf = self.mesh, self.inp.interface
         m = self.mass[:, 0]
         self.k_ww = self._penalty(m[:self.nw])
-        self.ww_hist = ce.new_slot_history(self.seg.shape[0], points=2)
+        self.ww_hist = ce.new_slot_history(self.seg.shape[0], points=ce.WW_POINTS)
         self.ww_pairs = np.zeros((0, 2), dtype=np.int64)
         # pins: one node group per friction coefficient (own penalty from its lightest node)
         part_nodes = {}
