@@ -146,6 +146,18 @@ def test_cli_rejects_unknown_case_and_parameter(tmp_path):
     assert not (tmp_path / "a.csv").exists()
 
 
+def test_case_loading_time_scale_and_explicit_override():
+    """A soft bundle's case may lengthen the loading time (t_total_scale); --set t_total wins."""
+    from harnesspipe.stages.hifi import inputs
+    cfg = load(overrides={"profile": "quick"})
+    base = cfg["profiles"]["quick"]["hifi"]["t_total"]
+    scale = cfg["hifi"]["extra_cases"]["twb19_t2"]["t_total_scale"]
+    assert scale > 1.0
+    assert inputs(cfg, "twb19_t2", {}).explicit["t_total"] == pytest.approx(scale * base)
+    assert inputs(cfg, "cwb19_t2_closed", {}).explicit["t_total"] == pytest.approx(base)
+    assert inputs(cfg, "twb19_t2", {"t_total": "0.5"}).explicit["t_total"] == 0.5
+
+
 def test_unstable_run_fails_with_diagnostics_and_writes_nothing(tmp_path):
     r = _cli("--case", "cwb19_t2_closed", "--profile", "quick", "--set", "safety=4.0",
              "--set", "t_total=0.05", "--out", str(tmp_path / "a.csv"),

@@ -80,8 +80,10 @@ def inputs(cfg: dict, case: str, overrides: dict, table2: Path | None = None):
     from harnesspipe.models.hifi import HifiInputs
     p = parameters(cfg, overrides, table2)
     res = p["resolution"]
-    explicit = {**p["explicit"], "t_total": float(p["explicit"].get("t_total", res["t_total"]))}
-    return HifiInputs(case_definition(cfg, case), cfg, p["interface"], explicit,
+    definition = case_definition(cfg, case)
+    t_total = p["explicit"].get("t_total", res["t_total"] * definition.get("t_total_scale", 1.0))
+    explicit = {**p["explicit"], "t_total": float(t_total)}
+    return HifiInputs(definition, cfg, p["interface"], explicit,
                       {k: v for k, v in res.items() if k != "t_total"}, p["coverings"])
 
 
