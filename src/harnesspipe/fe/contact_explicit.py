@@ -7,7 +7,7 @@ Interactions of the 3-point bending model of a wire bundle (eqs. 6-10):
                               constant-mu Coulomb per node, reaction on each cylinder;
 (c) ``node_facet_contact``    nodes (wires) against shell quads (tube, tape), one-sided,
                               eq. 6 friction;
-(d) ``cohesive_ties_quad`` / ``cohesive_ties_seg``  tape bonded to the tube / the wires by
+(d) ``cohesive_ties_quad`` / ``cohesive_ties_beam``  tape bonded to the tube / the wires by
                               the damaged cohesive law of eqs. 7-10 (fixed node-to-point ties);
 (e) ``make_ties``             Python helper building the ties from the initial geometry.
 
@@ -1101,86 +1101,6 @@ def _frame_forces(x, quads, q, xi, eta, L, p_node, f_c):
 
 
 @njit(cache=True)
-def _transport(t0, t, v, out):
-    """Minimal rotation taking unit t0 onto unit t, applied to v (no twist about the axis)."""
-    c = _dot(t0, t)
-    w0 = t0[1] * t[2] - t0[2] * t[1]
-    w1 = t0[2] * t[0] - t0[0] * t[2]
-    w2 = t0[0] * t[1] - t0[1] * t[0]
-    wv = w0 * v[0] + w1 * v[1] + w2 * v[2]
-    f = wv / (1.0 + c) if c > -1.0 + 1e-12 else 0.0
-    out[0] = c * v[0] + (w1 * v[2] - w2 * v[1]) + f * w0
-    out[1] = c * v[1] + (w2 * v[0] - w0 * v[2]) + f * w1
-    out[2] = c * v[2] + (w0 * v[1] - w1 * v[0]) + f * w2
-
-
-@njit(cache=True, parallel=True)
-def cohesive_ties_seg(x, tie_node, tie_seg, tie_s, tie_n0, tie_t0, tie_off, tie_area, seg, K,
-                      delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, f_c):
-    """Cohesive ties (eqs. 7-10) of nodes to fixed material points of beam segments.
-
-    Parameters as :func:`cohesive_ties_quad` except the target: tie_seg : (n_tie,)
-    segment; tie_s : (n_tie,) its parameter in [0, 1] (point (1 - s) x_0 + s x_1);
-    tie_n0 : (n_tie, 3) the initial unit radial direction (segment point -> tied node);
-    tie_t0 : (n_tie, 3) the initial unit segment axis; seg : (n_seg, 2) node ids.
-
-    Frame: s = current unit axis; n = tie_n0 carried by the minimal rotation taking
-    tie_t0 onto s (the beams' twist is not seen: the kernel only knows translations);
-    t = n x s.  delta = (d.n, d.s, d.t) - tie_off with d = x_node - x_target.
-    Returns the number of fully debonded ties.
-    """
-    n = tie_node.shape[0]
-    pf = np.empty((n, 3))
-    lever = np.empty((n, 3))
-    n_chunks = (n + CHUNK - 1) // CHUNK
-    for ch in prange(n_chunks):
-        scr = np.zeros((4, 3))      # per-task scratch
-        for j in range(ch * CHUNK, min(n, (ch + 1) * CHUNK)):
-            e = tie_seg[j]
-            s = tie_s[j]
-            a0 = seg[e, 0]
-            a1 = seg[e, 1]
-            delta = scr[0]
-            tloc = scr[1]
-            ax = scr[2]
-            nn = scr[3]
-            for c in range(3):
-                ax[c] = x[a1, c] - x[a0, c]
-            L = math.sqrt(_dot(ax, ax))
-            for c in range(3):
-                ax[c] /= L
-            _transport(tie_t0[j], ax, tie_n0[j], nn)
-            t0 = nn[1] * ax[2] - nn[2] * ax[1]
-            t1 = nn[2] * ax[0] - nn[0] * ax[2]
-            t2 = nn[0] * ax[1] - nn[1] * ax[0]
-            nd = tie_node[j]
-            d0 = x[nd, 0] - (1 - s) * x[a0, 0] - s * x[a1, 0]
-            d1 = x[nd, 1] - (1 - s) * x[a0, 1] - s * x[a1, 1]
-            d2 = x[nd, 2] - (1 - s) * x[a0, 2] - s * x[a1, 2]
-            delta[0] = d0 * nn[0] + d1 * nn[1] + d2 * nn[2] - tie_off[j, 0]
-            delta[1] = d0 * ax[0] + d1 * ax[1] + d2 * ax[2] - tie_off[j, 1]
-            delta[2] = d0 * t0 + d1 * t1 + d2 * t2 - tie_off[j, 2]
-            _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
-                          tie_area, tloc)
-            A = tie_area[j]
-            pf[j, 0] = -A * (tloc[0] * nn[0] + tloc[1] * ax[0] + tloc[2] * t0)
-            pf[j, 1] = -A * (tloc[0] * nn[1] + tloc[1] * ax[1] + tloc[2] * t1)
-            pf[j, 2] = -A * (tloc[0] * nn[2] + tloc[1] * ax[2] + tloc[2] * t2)
-    n_failed = 0
-    for j in range(n):
-        if tie_D[j] >= 1.0:
-            n_failed += 1
-        e = tie_seg[j]
-        s = tie_s[j]
-        for c in range(3):
-            f = pf[j, c]
-            f_c[tie_node[j], c] += f
-            f_c[seg[e, 0], c] -= (1 - s) * f
-            f_c[seg[e, 1], c] -= s * f
-    return n_failed
-
-
-@njit(cache=True)
 def cohesive_ties_beam(x, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm, tie_axis,
                        tie_area, seg, K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy,
                        f_c):
@@ -1195,8 +1115,8 @@ def cohesive_ties_beam(x, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm, t
     ``-p (1 - s)``, ``-p s`` and the anchor the moment ``(x_node - P) x (-p)`` on its spins,
     the derivative of the tie's energy with respect to the anchor rotation, which turns
     both the arm and the frame: the tie is conservative with the beam's own rotations,
-    also once damage treats opening and closing apart (the translation-only
-    :func:`cohesive_ties_seg` is not when the arm is finite and the wire turns).
+    also once damage treats opening and closing apart (a tie to the segment's translations
+    alone is not, once the arm is finite and the wire turns).
     Returns the number of fully debonded ties.
     """
     n = tie_node.shape[0]
@@ -1348,8 +1268,10 @@ def make_ties(x, tape_nodes, node_area, quads=None, quad_t=None, quad_sign=None,
     -------
     (ties_quad, ties_seg) : dicts of arrays, the arguments of
     :func:`cohesive_ties_quad` (``tie_node, tie_quad, tie_xi, tie_sign, tie_off,
-    tie_area``) and :func:`cohesive_ties_seg` (``tie_node, tie_seg, tie_s, tie_n0,
-    tie_t0, tie_off, tie_area``), plus zeroed ``tie_kappa``, ``tie_D``, ``tie_energy``.
+    tie_area``) and the segment ties (``tie_node, tie_seg, tie_s, tie_n0, tie_t0,
+    tie_off, tie_area``: :class:`harnesspipe.models.hifi.HifiSystem` turns them into the
+    arguments of :func:`cohesive_ties_beam`), plus zeroed ``tie_kappa``, ``tie_D``,
+    ``tie_energy``.
     """
     x = np.ascontiguousarray(np.asarray(x, dtype=float)[:, :3])
     tape_nodes = np.asarray(tape_nodes, dtype=np.int64)
