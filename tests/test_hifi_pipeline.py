@@ -438,6 +438,29 @@ def test_fabric_parameter_reruns_only_fabric_fits(project, overlay, crosscheck):
     assert planned_wildcards(run) == fabric
 
 
+def test_rom_reference_hifi_fits_the_virtual_test(project):
+    """rom.reference: hifi -- the ROM of a case is fitted to its hi-fi virtual test (not to the
+    measured mean under another name)."""
+    path = project / "rom_hifi.yaml"
+    path.write_text("rom:\n  reference: hifi\n")
+    target = "results/rom/cwb19_t2_closed/fit.json"
+    run = snakemake(project, target, "--configfile", str(path))
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    fit = json.loads((project / target).read_text())
+    assert fit["reference"] == "hifi" and fit["test_id"] == "hifi:cwb19_t2_closed"
+    # its error is that against the virtual curve (on the uniform grid of the prepared tests)
+    virtual = pd.read_csv(project / "results" / "hifi" / "virtual" / "cwb19_t2_closed" / "curve.csv")
+    grid, F = hifi_chain.resample(virtual, 30.0)
+    fitted = pd.read_csv(project / "results" / "rom" / "cwb19_t2_closed" / "curve.csv")
+    F_fit = np.interp(grid, fitted["displacement_mm"], fitted["force_N"])
+    assert fit["error_l2"] == pytest.approx(float(np.linalg.norm(F - F_fit)), rel=1e-6)
+    from harnesspipe.config import ConfigError
+    from harnesspipe.stages.rom import reference_curve
+    measured = next((project / "results" / "data").glob("*.h5"))
+    with pytest.raises(ConfigError, match="rom.reference"):
+        reference_curve(measured, {"reference": "hifi"})
+
+
 def test_hifi_rules_stay_out_of_all(project):
     jobs = planned(snakemake(project, "-n", "--rerun-triggers", "mtime", "params", "input", "code"))
     assert not any(rule.startswith("hifi") for rule in jobs)

@@ -20,10 +20,18 @@ def rom_settings(case):
     }, sort_keys=True)
 
 
+def rom_reference(wc):
+    """The curve the ROM of a case is fitted to: the measured mean, or with rom.reference: hifi
+    the hi-fi virtual test at the calibrated interface (workflow/rules/hifi.smk)."""
+    if config["rom"]["reference"] == "hifi":
+        return f"{RES}/hifi/virtual/{wc.case}/curve.csv"
+    return f"{RES}/data/{test_id_for('three_point', wc.case)}.h5"
+
+
 rule rom_fit:
     """eq. 13 (E_eff, first sigma_Y), then Nelder-Mead on the hardening of a beam model."""
     input:
-        lambda wc: f"{RES}/data/{test_id_for('three_point', wc.case)}.h5",
+        rom_reference,
         warm=rules.numba_warmup.output,
     output:
         fit=f"{RES}/rom/{{case}}/fit.json",
@@ -39,7 +47,8 @@ rule rom_fit:
         settings=lambda wc: rom_settings(wc.case),
         code=source_hash("fe", "models/rom_beam.py", "rom.py", "calibrate/rom.py", "calibrate/eq13.py",
                          "calibrate/simplex.py", "calibrate/objective.py", "stages/rom.py",
-                         "stages/common.py"),
+                         "stages/common.py",
+                         *(["stages/hifi_chain.py"] if config["rom"]["reference"] == "hifi" else [])),
     threads: 1
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage rom-fit --case {wildcards.case} --reference {input[0]} "

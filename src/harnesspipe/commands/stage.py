@@ -30,7 +30,8 @@ def register(sub) -> None:
 
     p = ssub.add_parser("rom-fit", help="eq. 13 + simplex for one CWB case (Sec. 4.3)")
     p.add_argument("--case", required=True)
-    p.add_argument("--reference", type=Path, required=True, help="prepared test (HDF5)")
+    p.add_argument("--reference", type=Path, required=True,
+                   help="prepared test (HDF5), or a hi-fi curve.csv with rom.reference hifi")
     p.add_argument("--settings", type=_settings, required=True)
     p.add_argument("--outdir", type=Path, required=True)
     p.set_defaults(func=_rom_fit)

@@ -131,10 +131,10 @@ def hifi_cases_figure(prepared: dict, curves: dict, title="", window=None):
     return fig
 
 
-def hifi_rom_figure(hifi, rom, title=""):
+def hifi_rom_figure(hifi, rom, title="", label="hi-fi (paper's parameters)"):
     """A hi-fi curve and the ROM fitted to it (eq. 13 + simplex)."""
     fig, ax = plt.subplots(figsize=(5.2, 3.6), dpi=110)
-    ax.plot(hifi["deflection_mm"], hifi["force_N"], color="k", lw=1.4, label="hi-fi (paper's parameters)")
+    ax.plot(hifi["deflection_mm"], hifi["force_N"], color="k", lw=1.4, label=label)
     ax.plot(rom["displacement_mm"], rom["force_N"], color="tab:red", lw=1.6, ls="--", label="ROM (fitted)")
     ax.set_xlabel("deflection [mm]")
     ax.set_ylabel("force [N]")

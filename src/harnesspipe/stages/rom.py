@@ -13,6 +13,7 @@ import pandas as pd
 
 from harnesspipe.calibrate import rom as rom_fit
 from harnesspipe.calibrate.objective import l2_error, relative_l2_error
+from harnesspipe.config import ConfigError
 from harnesspipe.report import plots
 from harnesspipe.stages.common import read_fit, write_csv, write_fit, write_shapes
 from harnesspipe.stages.data import read_prepared
@@ -20,25 +21,47 @@ from harnesspipe.stages.data import read_prepared
 TABLE3_COLUMNS = ["case", "E", "sigma_y", "K", "n", "reference"]
 
 
+def reference_curve(path: Path, settings: dict):
+    """``(grid, force, test_id, source)`` of the curve the ROM is fitted to: the mean of a
+    prepared measured test (``.h5``, ``rom.reference: measured``) or a hi-fi virtual test's
+    ``curve.csv`` resampled to the same uniform grid (``rom.reference: hifi``); ``source``
+    is the prepared test or the hi-fi curve."""
+    path = Path(path)
+    kind = "hifi" if path.suffix == ".csv" else "measured"
+    if kind != settings["reference"]:
+        raise ConfigError(f"{path}: a {kind} reference, but rom.reference is {settings['reference']!r}")
+    if kind == "hifi":
+        from harnesspipe.stages.hifi_chain import resample
+        curve = pd.read_csv(path)
+        grid, F = resample(curve, settings["three_point"]["deflection"])
+        return grid, F, f"hifi:{path.parent.name}", curve
+    ref = read_prepared(path)
+    return ref.grid, ref.mean, ref.test_id, ref
+
+
 def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
     """Calibrate one case; write fit.json, curve.csv, trace.h5, shapes (CSV, VTU) and fit.png."""
     outdir = Path(outdir)
-    ref = read_prepared(reference)
+    grid, F_ref, test_id, source = reference_curve(reference, settings)
     t0 = time.perf_counter()
-    result = rom_fit.fit(ref.grid, ref.mean, settings, log_path=outdir / "trace.h5")
+    result = rom_fit.fit(grid, F_ref, settings, log_path=outdir / "trace.h5")
     curve, shapes = rom_fit.simulate(result.parameters, settings, return_shapes=True)
     curve = curve.rename(columns={"deflection_mm": "displacement_mm"})
     write_shapes(outdir, shapes)
-    F_fit = np.interp(ref.grid, curve["displacement_mm"], curve["force_N"])
-    path = write_fit(outdir, stage="rom", item=case, test_id=ref.test_id,
+    F_fit = np.interp(grid, curve["displacement_mm"], curve["force_N"])
+    path = write_fit(outdir, stage="rom", item=case, test_id=test_id,
                      parameters={k: result.parameters[k] for k in ("E", "sigma_y", "K", "n")},
-                     error_l2=l2_error(ref.mean, F_fit), error_rel=relative_l2_error(ref.mean, F_fit),
+                     error_l2=l2_error(F_ref, F_fit), error_rel=relative_l2_error(F_ref, F_fit),
                      nfev=result.result.nfev, converged=result.result.converged,
                      wall_s=time.perf_counter() - t0, curve=curve,
                      extra={"E_eq13": result.E_eq13, "sigma_y_eq13": result.sigma_y_eq13, "reference": settings["reference"],
                             "fitted": list(settings["rom"]["simplex_parameters"])})
-    plots.save(plots.fit_figure(ref, curve, title=f"{case}: ROM at fitted properties",
-                                xlabel="deflection [mm]", label="ROM (fitted)"), outdir / "fit.png")
+    title = f"{case}: ROM at fitted properties"
+    if settings["reference"] == "hifi":
+        fig = plots.hifi_rom_figure(source, curve, title=title, label="hi-fi virtual test")
+    else:
+        fig = plots.fit_figure(source, curve, title=title, xlabel="deflection [mm]", label="ROM (fitted)")
+    plots.save(fig, outdir / "fit.png")
     return read_fit(path)
 
 
