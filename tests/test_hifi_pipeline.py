@@ -461,6 +461,28 @@ def test_rom_reference_hifi_fits_the_virtual_test(project):
         reference_curve(measured, {"reference": "hifi"})
 
 
+def test_branch_properties_from_hifi_virtual_tests(project):
+    """branch.properties_source: hifi -- the Y-harness beams take E, sigma_y, K, n from eq. 13 +
+    simplex on each case's hi-fi virtual test (Sec. 5), the radius from the config."""
+    path = project / "branch_hifi.yaml"
+    path.write_text("branch:\n  properties_source: hifi\n")
+    run = snakemake(project, "results/branch/damping.csv", "--configfile", str(path))
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    used = json.loads((project / "results" / "branch" / "inplane" / "fit.json").read_text())["properties"]
+    from harnesspipe.config import load
+    estimates = load(project / "config" / "config.yaml")["branch"]["properties"]
+    assert sorted(used) == sorted(estimates)
+    for case in estimates:
+        rom = json.loads((project / "results" / "hifi" / "virtual" / case / "rom" / "fit.json").read_text())
+        assert {k: used[case][k] for k in ("E", "sigma_y", "K", "n")} == rom["parameters"]
+        assert used[case]["radius"] == estimates[case]["radius"]
+    from harnesspipe.config import ConfigError
+    from harnesspipe.stages.branch import with_fitted_properties
+    fit = project / "results" / "hifi" / "virtual" / "twb19_t2" / "rom" / "fit.json"
+    with pytest.raises(ConfigError, match="branch.properties"):
+        with_fitted_properties({"properties": estimates}, {"twb99": fit})
+
+
 def test_hifi_rules_stay_out_of_all(project):
     jobs = planned(snakemake(project, "-n", "--rerun-triggers", "mtime", "params", "input", "code"))
     assert not any(rule.startswith("hifi") for rule in jobs)

@@ -5,9 +5,15 @@ BRANCH_TESTS = {e.get("load_case"): t for t, e in TESTS.items() if e.get("kind")
 
 def branch_settings():
     b = config["branch"]
-    return json.dumps({k: b[k] for k in ("properties", "geometry", "n_steps", "dt_min", "stroke", "rate",
-                                         "alpha_bounds", "alpha_xatol")}, sort_keys=True)
+    return json.dumps({k: b[k] for k in ("properties", "properties_source", "geometry", "n_steps", "dt_min",
+                                         "stroke", "rate", "alpha_bounds", "alpha_xatol")}, sort_keys=True)
 
+
+# branch.properties_source: hifi -- the beams' E, sigma_y, K, n from eq. 13 + simplex on each
+# case's hi-fi virtual test (rule hifi_virtual_rom), in place of the config's estimates
+BRANCH_HIFI_FITS = ({c: f"{RES}/hifi/virtual/{c}/rom/fit.json" for c in sorted(config["branch"]["properties"])}
+                    if config["branch"]["properties_source"] == "hifi" else {})
+BRANCH_PROPS = " ".join(f"{c}={p}" for c, p in BRANCH_HIFI_FITS.items())
 
 BRANCH_CODE = source_hash("fe", "models/branch.py", "models/rom_beam.py", "calibrate/branch.py",
                           "calibrate/simplex.py", "calibrate/objective.py", "stages/branch.py",
@@ -19,6 +25,7 @@ rule branch_fit:
     input:
         ref=lambda wc: f"{RES}/data/{BRANCH_TESTS['inplane']}.h5",
         warm=rules.numba_warmup.output,
+        hifi_props=list(BRANCH_HIFI_FITS.values()),
     output:
         fit=f"{RES}/branch/inplane/fit.json",
         curve=f"{RES}/branch/inplane/curve.csv",
@@ -35,7 +42,8 @@ rule branch_fit:
     threads: 1
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage branch-fit --reference {input.ref} "
-        "--settings '{params.settings}' --outdir {RES}/branch/inplane --damping {output.damping} > {log} 2>&1"
+        "--settings '{params.settings}' --outdir {RES}/branch/inplane --damping {output.damping} "
+        "--properties-from {BRANCH_PROPS} > {log} 2>&1"
 
 
 rule branch_elastic:
@@ -43,6 +51,7 @@ rule branch_elastic:
     input:
         ref=lambda wc: f"{RES}/data/{BRANCH_TESTS['inplane']}.h5",
         warm=rules.numba_warmup.output,
+        hifi_props=list(BRANCH_HIFI_FITS.values()),
     output:
         fit=f"{RES}/branch/elastic/fit.json",
         curve=f"{RES}/branch/elastic/curve.csv",
@@ -57,7 +66,8 @@ rule branch_elastic:
     shell:
         "{HP} stage branch-predict --reference {input.ref} --settings '{params.settings}' "
         "--outdir {RES}/branch/elastic --load-case inplane --alpha 0 "
-        "--item 'in-plane pull: elastic joint (alpha = 0)' --role prediction > {log} 2>&1"
+        "--item 'in-plane pull: elastic joint (alpha = 0)' --role prediction "
+        "--properties-from {BRANCH_PROPS} > {log} 2>&1"
 
 
 rule branch_validate:
@@ -65,6 +75,7 @@ rule branch_validate:
     input:
         ref=lambda wc: f"{RES}/data/{BRANCH_TESTS['outofplane']}.h5",
         damping=f"{RES}/branch/damping.csv",
+        hifi_props=list(BRANCH_HIFI_FITS.values()),
     output:
         fit=f"{RES}/branch/outofplane/fit.json",
         curve=f"{RES}/branch/outofplane/curve.csv",
@@ -79,7 +90,8 @@ rule branch_validate:
     shell:
         "{HP} stage branch-predict --reference {input.ref} --settings '{params.settings}' "
         "--outdir {RES}/branch/outofplane --load-case outofplane --damping {input.damping} "
-        "--item 'out-of-plane pull: validation at calibrated alpha' > {log} 2>&1"
+        "--item 'out-of-plane pull: validation at calibrated alpha' "
+        "--properties-from {BRANCH_PROPS} > {log} 2>&1"
 
 
 if {"inplane", "outofplane"} <= set(BRANCH_TESTS):

@@ -258,6 +258,31 @@ rule hifi_virtual:
         "{params.ref} --outdir {RES}/hifi/virtual/{wildcards.case} > {log} 2>&1"
 
 
+rule hifi_virtual_rom:
+    """eq. 13 + simplex on a virtual test (Sec. 4.3; for the branch: branch.properties_source hifi)."""
+    input:
+        curve=f"{RES}/hifi/virtual/{{case}}/curve.csv",
+        warm=rules.numba_warmup.output,
+    output:
+        fit=f"{RES}/hifi/virtual/{{case}}/rom/fit.json",
+        curve=f"{RES}/hifi/virtual/{{case}}/rom/curve.csv",
+        trace=f"{RES}/hifi/virtual/{{case}}/rom/trace.h5",
+        plot=report(f"{RES}/hifi/virtual/{{case}}/rom/fit.png", caption="../report/hifi.rst",
+                    category="Hi-fi (Sec. 4)", subcategory="virtual test {case}"),
+    log:
+        f"{RES}/logs/hifi_virtual_rom_{{case}}.log",
+    params:
+        settings=lambda wc: hifi_rom_settings(wc.case),
+        code=HIFI_ROM_CODE,
+    wildcard_constraints:
+        case="|".join(sorted(HIFI_CASES)),
+    threads: 1
+    shell:
+        "NUMBA_NUM_THREADS={threads} {HP} stage hifi-rom --case {wildcards.case} --curve {input.curve} "
+        "--settings '{params.settings}' --label 'hi-fi virtual test' "
+        "--outdir {RES}/hifi/virtual/{wildcards.case}/rom > {log} 2>&1"
+
+
 HIFI_CROSSCHECK_TARGETS = [f"{RES}/hifi/crosscheck/table3.csv"] + [
     f"{RES}/hifi/crosscheck/{c}/summary.json" for c in HIFI_CROSSCHECK]
 HIFI_CHAIN_TARGETS = [f"{RES}/hifi/interface.csv"] + [

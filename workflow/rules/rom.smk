@@ -7,7 +7,7 @@ ROM_CASES = sorted(e["item"] for e in TESTS.values()
 def rom_settings(case):
     tp = config["three_point"]
     return json.dumps({
-        "r_o": config["cases"][case]["r_o"],
+        "r_o": {**config["cases"], **config["hifi"]["extra_cases"]}[case]["r_o"],
         "supports": config["rom"]["supports"],
         "mu": config["rom"]["roller_friction"],
         "reference": config["rom"]["reference"],

@@ -41,6 +41,8 @@ def register(sub) -> None:
     p.add_argument("--settings", type=_settings, required=True)
     p.add_argument("--outdir", type=Path, required=True)
     p.add_argument("--damping", type=Path, required=True, help="damping.csv to write")
+    p.add_argument("--properties-from", nargs="*", default=[], metavar="CASE=FIT",
+                   help="fit.json of eq. 13 + simplex on a case's hi-fi virtual test")
     p.set_defaults(func=_branch_fit)
 
     p = ssub.add_parser("branch-predict", help="Y-harness ROM against a test, no refit")
@@ -53,6 +55,8 @@ def register(sub) -> None:
     group.add_argument("--damping", type=Path, help="damping.csv with the calibrated alpha")
     p.add_argument("--item", required=True, help="title of the prediction in the report")
     p.add_argument("--role", default="validation")
+    p.add_argument("--properties-from", nargs="*", default=[], metavar="CASE=FIT",
+                   help="fit.json of eq. 13 + simplex on a case's hi-fi virtual test")
     p.set_defaults(func=_branch_predict)
 
     p = ssub.add_parser("tensile-fit", help="calibrate one covering on its tensile test (Sec. 3.2)")
@@ -105,6 +109,7 @@ def register(sub) -> None:
     p.add_argument("--curve", type=Path, required=True, help="hi-fi curve.csv (deflection_mm,force_N)")
     p.add_argument("--settings", type=_settings, required=True)
     p.add_argument("--outdir", type=Path, required=True)
+    p.add_argument("--label", default="hi-fi (paper's parameters)", help="legend of the hi-fi curve")
     p.set_defaults(func=_hifi_rom)
 
 
@@ -122,16 +127,30 @@ def _rom_fit(args) -> int:
     return 0
 
 
+def _branch_settings(args) -> dict:
+    from harnesspipe.cli import InputError
+    from harnesspipe.stages.branch import with_fitted_properties
+    fits = {}
+    for item in args.properties_from:
+        case, sep, path = item.partition("=")
+        if not sep:
+            raise InputError(f"--properties-from {item!r}: expected CASE=PATH")
+        fits[case] = Path(path)
+    return with_fitted_properties(args.settings, fits)
+
+
 def _branch_fit(args) -> int:
     from harnesspipe.stages.branch import calibrate
-    print(json.dumps(calibrate(args.reference, args.settings, args.outdir, args.damping), indent=2))
+    settings = _branch_settings(args)
+    print(json.dumps(calibrate(args.reference, settings, args.outdir, args.damping), indent=2))
     return 0
 
 
 def _branch_predict(args) -> int:
     from harnesspipe.stages.branch import predict, read_alpha
     alpha = args.alpha if args.alpha is not None else read_alpha(args.damping)
-    fit = predict(args.reference, args.settings, args.outdir, args.load_case, alpha, args.item, args.role)
+    fit = predict(args.reference, _branch_settings(args), args.outdir, args.load_case, alpha, args.item,
+                  args.role)
     print(json.dumps(fit, indent=2))
     return 0
 
@@ -191,5 +210,6 @@ def _hifi_interface(args) -> int:
 
 def _hifi_rom(args) -> int:
     from harnesspipe.stages.hifi_chain import rom_crosscheck
-    print(json.dumps(rom_crosscheck(args.case, args.curve, args.settings, args.outdir), indent=2))
+    print(json.dumps(rom_crosscheck(args.case, args.curve, args.settings, args.outdir, label=args.label),
+                     indent=2))
     return 0

@@ -14,6 +14,7 @@ import pandas as pd
 
 from harnesspipe.calibrate.branch import fit_alpha
 from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
+from harnesspipe.config import ConfigError
 from harnesspipe.models import branch
 from harnesspipe.report import plots
 from harnesspipe.stages.common import read_fit, write_csv, write_fit, write_shapes
@@ -24,6 +25,20 @@ SHAPES_AT = (10.0, 25.0, 50.0)  # crosshead travels of the marker frames
 
 def model_options(settings: dict) -> dict:
     return {k: settings[k] for k in ("properties", "geometry", "n_steps", "dt_min", "stroke", "rate")}
+
+
+def with_fitted_properties(settings: dict, fits: dict[str, Path]) -> dict:
+    """``settings`` with E, sigma_y, K, n of the cases in ``fits`` (case -> fit.json of eq. 13
+    + simplex on that case's hi-fi virtual test) in place of the config's estimates; the
+    radius stays the config's.  Sec. 5: the 38-wire CWB and the TWBs get their properties
+    the way Sec. 4.3 gives the CWBs theirs."""
+    props = {c: dict(v) for c, v in settings["properties"].items()}
+    for case, path in fits.items():
+        if case not in props:
+            raise ConfigError(f"{path}: case {case!r} is not one of branch.properties {sorted(props)}")
+        fitted = read_fit(path)["parameters"]
+        props[case].update({k: float(fitted[k]) for k in ("E", "sigma_y", "K", "n")})
+    return {**settings, "properties": props}
 
 
 def _write(outdir: Path, item: str, ref, alpha: float, settings: dict, load_case: str,
@@ -38,7 +53,8 @@ def _write(outdir: Path, item: str, ref, alpha: float, settings: dict, load_case
     path = write_fit(outdir, stage="branch", item=item, test_id=ref.test_id,
                      parameters={"alpha": alpha}, error_l2=l2_error(ref.mean, F_model),
                      error_rel=relative_l2_error(ref.mean, F_model), nfev=nfev, converged=converged,
-                     wall_s=wall_s, curve=curve, extra={"load_case": load_case, **extra})
+                     wall_s=wall_s, curve=curve,
+                     extra={"load_case": load_case, "properties": settings["properties"], **extra})
     plots.save(plots.fit_figure(ref, curve, title=item, label=f"Y-harness ROM, alpha = {alpha:.3g}"),
                outdir / "fit.png")
     return read_fit(path)

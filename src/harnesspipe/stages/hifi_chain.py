@@ -307,7 +307,8 @@ def resample(curve: pd.DataFrame, deflection: float, n: int = N_GRID) -> tuple[n
     return grid, np.interp(grid, u, F)
 
 
-def rom_crosscheck(case: str, curve_csv: Path, settings: dict, outdir: Path) -> dict:
+def rom_crosscheck(case: str, curve_csv: Path, settings: dict, outdir: Path,
+                   label: str = "hi-fi (paper's parameters)") -> dict:
     """eq. 13 + simplex on the hi-fi curve of ``case``: fit.json, curve.csv, trace.h5, fit.png."""
     from harnesspipe.report import plots
     outdir = Path(outdir)
@@ -325,6 +326,6 @@ def rom_crosscheck(case: str, curve_csv: Path, settings: dict, outdir: Path) -> 
                      extra={"E_eq13": result.E_eq13, "sigma_y_eq13": result.sigma_y_eq13,
                             "reference": "hifi", "hifi_curve": str(curve_csv),
                             "fitted": list(settings["rom"]["simplex_parameters"])})
-    plots.save(plots.hifi_rom_figure(hifi, curve, title=f"{case}: ROM on the hi-fi curve"),
+    plots.save(plots.hifi_rom_figure(hifi, curve, title=f"{case}: ROM on the hi-fi curve", label=label),
                outdir / "fit.png")
     return read_fit(path)
