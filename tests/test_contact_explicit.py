@@ -280,6 +280,24 @@ def test_node_on_facet_normal_edge_partition_and_one_sided():
                   pen_max=0.01)[0] == 0
 
 
+def test_node_behind_a_free_edge_is_not_grabbed():
+    """A node behind the plate's plane beside its free edge (e.g. the next layer of a fabric
+    spiral where the facet set stops) that slides over the plate is on the other side: no
+    force.  A node that went in from the front stays pushed out."""
+    xp, quads = _plate(1, 4.0)                      # one quad, x and y in [-2, 2]: free edges
+    t, k_n = 0.27, 100.0
+    pairs = np.array([[0, 0]])
+    hp, hf = new_slot_history(1, 8)
+    for xx in (2.3, 2.05, 1.9, 1.5):               # beside the edge x = 2, then over the plate
+        x = np.vstack([xp, [[xx, 0.0, -0.1]]])      # 0.1 mm behind the mid-surface
+        assert _facet(x, _z(len(x)), np.array([len(xp)]), quads, t, 1.0, pairs, hp, hf)[0] == 0
+    hp, hf = new_slot_history(1, 8)
+    for z in (R_W + t / 2 - 0.05, 0.2, -0.1):      # in from the front, through the mid-surface
+        x = np.vstack([xp, [[1.5, 0.0, z]]])
+        n, fn, _ = _facet(x, _z(len(x)), np.array([len(xp)]), quads, t, 1.0, pairs, hp, hf)
+        assert n == 1 and fn[-1, 2] == pytest.approx(k_n * (R_W + t / 2 - z), rel=1e-9)
+
+
 def test_node_sliding_on_facet_eq6_rate_and_dissipation():
     xp, quads = _plate(4, 8.0)                   # 2 mm quads: the node crosses quad edges
     t, pen, k_n, k_t = 0.27, 0.02, 100.0, 10.0

@@ -780,9 +780,13 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
     get pushed out with energy that was never stored.  The force direction is the unit
     vector from the closest point to the node (the facet normal inside a facet); a node
     already behind the mid-surface (side test ``quad_sign * n . d < 0``) over the facet's
-    interior is pushed along the facet normal, up to the penetration ``pen_max``; behind the
-    plane but beside the facet (closest point on its boundary: a wire beyond the tube's end,
-    an open cut's edge) is no contact.  Limitation: one contact per node and
+    interior is pushed along the facet normal, up to the penetration ``pen_max``, provided it
+    was in contact with the set at the previous step (``hist_partner[i, 0] >= 0``: it went in
+    from the front); behind the plane but beside the facet (closest point on its boundary: a
+    wire beyond the tube's end, an open cut's edge) is no contact.  Without the history rule a
+    node beside a FREE edge of the set and behind its plane (the next fabric layer of a spiral
+    where the set's quads stop) met its whole penetration at once when it slid over the facet,
+    and was pushed out with energy never stored.  Limitation: one contact per node and
     set, so a node pinched between two opposite walls of the same set (a tube flattened
     below one wire diameter) only sees the nearer one.
     Returns the number of active contacts.
@@ -801,11 +805,12 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
         for ch in prange(n_chunks):
             _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, ch * CHUNK,
                         min(n_pairs, (ch + 1) * CHUNK), pd)
-    # closest facet per node (pairs are grouped by node)
+    # closest facet per node (pairs are grouped by node); behind a facet only a node that was
+    # in contact at the previous step (it went in from the front)
     best = -np.ones(n_cn, dtype=np.int64)
     for p in range(n_pairs):
         i = pairs[p, 0]
-        if not np.isfinite(pd[p, 2]):
+        if not np.isfinite(pd[p, 2]) or (pd[p, 2] < 0.0 and hist_partner[i, 0] < 0):
             continue
         b = best[i]
         if b < 0 or abs(pd[p, 2]) < abs(pd[b, 2]):
@@ -855,8 +860,8 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
             rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew, ds)
         for s in range(maxs):
             hist_partner[i, s] = -1
+        hist_partner[i, 0] = q              # in contact (also read by the behind-facet rule)
         if k_t > 0.0:
-            hist_partner[i, 0] = q
             for c in range(3):
                 hist_ft[i, 0, c] = hnew[c]
         for c in range(3):

@@ -289,6 +289,7 @@ class HifiSystem:
             self._search_set(fs)
             f_n = np.zeros((self.mesh.n_nodes, 6))
             hist = ce.new_slot_history(fs["nodes"].size)
+            hist[0][:, 0] = 0        # every node counts as in contact: find those behind a facet too
             ce.node_facet_contact(self.x, np.zeros_like(f_n), fs["nodes"], fs["r"], fs["quads"],
                                   fs["t"], fs["sign"], fs["pairs"], 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
                                   1.0, fs["pen_max"], hist[0], hist[1], f_n, np.zeros_like(f_n))
