@@ -127,16 +127,21 @@ def _rom_fit(args) -> int:
     return 0
 
 
-def _branch_settings(args) -> dict:
+def _case_paths(items, option: str) -> dict:
+    """``CASE=PATH`` arguments of ``option`` as {case: Path}."""
     from harnesspipe.cli import InputError
-    from harnesspipe.stages.branch import with_fitted_properties
-    fits = {}
-    for item in args.properties_from:
+    paths = {}
+    for item in items:
         case, sep, path = item.partition("=")
         if not sep:
-            raise InputError(f"--properties-from {item!r}: expected CASE=PATH")
-        fits[case] = Path(path)
-    return with_fitted_properties(args.settings, fits)
+            raise InputError(f"{option} {item!r}: expected CASE=PATH")
+        paths[case] = Path(path)
+    return paths
+
+
+def _branch_settings(args) -> dict:
+    from harnesspipe.stages.branch import with_fitted_properties
+    return with_fitted_properties(args.settings, _case_paths(args.properties_from, "--properties-from"))
 
 
 def _branch_fit(args) -> int:
@@ -185,12 +190,7 @@ def _hifi_run(args) -> int:
 def _hifi_fit(args) -> int:
     from harnesspipe.cli import InputError
     from harnesspipe.stages.hifi_chain import fit_step
-    refs = {}
-    for item in args.reference:
-        case, sep, path = item.partition("=")
-        if not sep:
-            raise InputError(f"--reference {item!r}: expected CASE=PATH")
-        refs[case] = Path(path)
+    refs = _case_paths(args.reference, "--reference")
     missing = [c for c in args.settings.get("cases", []) if c not in refs]
     if missing:
         raise InputError(f"--reference: no prepared test for {missing}")
