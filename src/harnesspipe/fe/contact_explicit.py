@@ -369,20 +369,21 @@ def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out, blend):
 def _blend_forces(x, a0, a1, b0, b1, dUdcos, f_n):
     """Forces ``-dU/dcos * d|cos|/dx`` of the blend (``dUdcos = (U_par - U_cross) beta'``):
     the part of the pair's energy gradient that comes from beta turning with the segments."""
-    da = np.empty(3)
-    db = np.empty(3)
+    A = E = B = 0.0
     for c in range(3):
-        da[c] = x[a1, c] - x[a0, c]
-        db[c] = x[b1, c] - x[b0, c]
-    A = _dot(da, da)
-    E = _dot(db, db)
-    B = _dot(da, db)
+        da = x[a1, c] - x[a0, c]
+        db = x[b1, c] - x[b0, c]
+        A += da * da
+        E += db * db
+        B += da * db
     LL = math.sqrt(A * E)
     cs = abs(B) / LL
     sg = 1.0 if B >= 0.0 else -1.0
     for c in range(3):
-        ga = sg * db[c] / LL - cs * da[c] / A          # d|cos| / d(da)
-        gb = sg * da[c] / LL - cs * db[c] / E          # d|cos| / d(db)
+        da = x[a1, c] - x[a0, c]
+        db = x[b1, c] - x[b0, c]
+        ga = sg * db / LL - cs * da / A          # d|cos| / d(da)
+        gb = sg * da / LL - cs * db / E          # d|cos| / d(db)
         f_n[a1, c] -= dUdcos * ga
         f_n[a0, c] += dUdcos * ga
         f_n[b1, c] -= dUdcos * gb
