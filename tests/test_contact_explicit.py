@@ -7,8 +7,10 @@ import pytest
 from harnesspipe.fe.cohesive import cohesive_dissipated_energy
 from harnesspipe.fe.contact_explicit import (
     beam_beam_contact, cohesive_tie_dissipation, cohesive_ties_quad,
-    WW_POINTS, make_ties, new_slot_history, node_cylinder_contact, node_facet_contact)
-from harnesspipe.fe.spatial_hash import box_pairs, node_aabbs, quad_aabbs, segment_aabbs
+    WW_POINTS, fit_slot_history, make_ties, new_slot_history, node_cylinder_contact,
+    node_facet_contact)
+from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, node_aabbs, quad_aabbs,
+                                         segment_aabbs)
 
 R_W = 0.65
 
@@ -39,6 +41,34 @@ def test_box_pairs_matches_brute_force(same):
         assert set(pairs) == ref
         if same:
             assert np.all(got[:, 0] < got[:, 1])
+
+
+def _segment_distance(p0, p1, q0, q1):
+    """Closest distance of two segments, by dense sampling of one and projection on the other."""
+    s = np.linspace(0.0, 1.0, 401)[:, None]
+    pts = p0 + s * (p1 - p0)
+    d = q1 - q0
+    u = np.clip((pts - q0) @ d / (d @ d), 0.0, 1.0)[:, None]
+    return float(np.min(np.linalg.norm(pts - (q0 + u * d), axis=1)))
+
+
+def test_skin_search_keeps_every_touching_pair():
+    """Candidates found with margin m hold every pair that touches after each node moved up
+    to m / 2 (the rule of HifiSystem: search anew once max_drift2 > (m / 2)^2)."""
+    rng = np.random.default_rng(11)
+    n, r, m = 120, 0.5, 0.2
+    a = rng.uniform(0.0, 12.0, (n, 3))
+    x = np.vstack([a, a + rng.normal(scale=2.0, size=(n, 3))])
+    seg = np.c_[np.arange(n), np.arange(n, 2 * n)]
+    radii = np.full(n, r)
+    lo, hi = segment_aabbs(x, seg, radii, m)
+    found = {tuple(p) for p in box_pairs(lo, hi, lo, hi, 2.0, True)}
+    step = rng.normal(size=x.shape)
+    x1 = x + 0.4999 * m * step / np.linalg.norm(step, axis=1)[:, None]
+    assert max_drift2(x1, x) < (0.5 * m) ** 2
+    touching = {(i, j) for i in range(n) for j in range(i + 1, n)
+                if _segment_distance(x1[i], x1[n + i], x1[j], x1[n + j]) < 2 * r}
+    assert len(touching) > 20 and touching <= found
 
 
 def test_aabb_helpers():
@@ -195,6 +225,33 @@ def test_wire_wire_friction_eq6_history_across_rehash():
         assert ft[:2, 0].sum() == pytest.approx(mu * N, rel=1e-9)
         assert np.allclose(ft[:, 1:3], 0.0)
     # (the two runs differ 120x in simulated speed but share the physical rate, hence mu)
+
+
+def test_slot_history_grows_to_every_candidate_partner():
+    """One wire crossed by ten others: with 8 slots two touching pairs keep no friction
+    history; fit_slot_history makes room for all ten (and keeps what is stored)."""
+    n = 10
+    xs = np.linspace(-4.5, 4.5, n)
+    x = [[-6.0, 0, 0], [6.0, 0, 0]]
+    for xc in xs:
+        x += [[xc, -3.0, 2 * R_W - 0.02], [xc, 3.0, 2 * R_W - 0.02]]
+    x = np.array(x)
+    seg = np.array([[2 * k, 2 * k + 1] for k in range(n + 1)], dtype=np.int64)
+    pairs = np.array([[0, k] for k in range(1, n + 1)], dtype=np.int64)
+    body = np.arange(n + 1)
+    v = _z(len(x))
+    v[2:, 0] = 1.0                                  # the crossing wires slide along the first
+    kept = {}
+    for fit in (False, True):
+        hist = new_slot_history(n + 1, 8, WW_POINTS)
+        hist[0][0, 0] = 3                           # something stored before the fit
+        if fit:
+            hist = fit_slot_history(hist, pairs.min(axis=1))
+            assert hist[0][0, 0] == 3 and hist[0].shape[1] == n
+        for _ in range(2):
+            _, fn, ft = _bb(x, v, seg, pairs, body, *hist, k_t=50.0)
+        kept[fit] = int(np.sum(hist[0][0] >= 0))
+    assert kept == {False: 8, True: n}
 
 
 # ---------------------------------------------------------------- node on rigid cylinder

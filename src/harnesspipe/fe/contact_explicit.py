@@ -77,6 +77,19 @@ def new_slot_history(n_owner, maxs=DEFAULT_MAXS, points=1):
     return hp, np.zeros((n_owner, maxs, points, 3))
 
 
+def fit_slot_history(hist, owners):
+    """The slot history ``(hist_partner, hist_ft)`` with room for every owner's candidate
+    partners (``owners``: the owner of each candidate pair, e.g. ``min(a, b)`` of the
+    wire-wire pairs); existing slots are kept.  A touching pair that finds no free slot
+    loses its stick force at every step, and which pairs lose it depends on the pair order."""
+    hp, hf = hist
+    grow = int(np.bincount(owners, minlength=hp.shape[0]).max(initial=0)) - hp.shape[1]
+    if grow <= 0:
+        return hist
+    pad = ((0, 0), (0, grow)) + ((0, 0),) * (hf.ndim - 2)
+    return np.pad(hp, pad[:2], constant_values=-1), np.pad(hf, pad)
+
+
 # ----------------------------------------------------------------------------- helpers
 @njit(cache=True, inline="always")
 def _dot(a, b):
