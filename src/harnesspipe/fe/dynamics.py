@@ -59,24 +59,27 @@ def half_kick(v, F, minv, free, hdt):
 
 
 @njit(cache=True)
-def family_work(F0, F1, du, W):
-    """W[p] += sum 1/2 (F0_p + F1_p) . du for every family p."""
-    P, n, k = F0.shape
-    for p in range(P):
-        s = 0.0
-        for i in range(n):
-            for j in range(k):
-                s += 0.5 * (F0[p, i, j] + F1[p, i, j]) * du[i, j]
-        W[p] += s
-
-
-@njit(cache=True)
-def kinetic_energy(m, v):
-    s = 0.0
-    for i in range(m.shape[0]):
-        for j in range(m.shape[1]):
-            s += m[i, j] * v[i, j] * v[i, j]
-    return 0.5 * s
+def close_step(F, F_new, du, W, v, minv, free, hdt, m):
+    """The end of a step: every family's work ``W[p] += 1/2 (F_p + F_new_p) . du``, the
+    closing half kick ``v += hdt M^-1 sum_p F_new_p``, ``F <- F_new``; returns the
+    kinetic energy ``1/2 v . M v``.  One pass over the nodes (the integrator's own cost
+    per step is then one kernel call)."""
+    P, n, k = F.shape
+    ke = 0.0
+    for i in range(n):
+        for j in range(k):
+            s = 0.0
+            for p in range(P):
+                fn = F_new[p, i, j]
+                W[p] += 0.5 * (F[p, i, j] + fn) * du[i, j]
+                F[p, i, j] = fn
+                s += fn
+            if free[i, j]:
+                v[i, j] += hdt * s * minv[i, j]
+            else:
+                v[i, j] = 0.0
+            ke += m[i, j] * v[i, j] * v[i, j]
+    return 0.5 * ke
 
 
 @dataclass(frozen=True)
@@ -141,14 +144,10 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
         np.multiply(v, h, out=du)
         t_new = t + h
         system.advance(du, t_new)
-        F_new = system.forces(t_new, v, h)
-        family_work(F, F_new, du, W)
+        ke = close_step(F, system.forces(t_new, v, h), du, W, v, minv, free, 0.5 * h, m)
         w_ext += system.external_work(t, t_new)
-        F[...] = F_new
-        half_kick(v, F, minv, free, 0.5 * h)
         system.commit()
         t = t_new
-        ke = kinetic_energy(m, v)
         absorbed = -W
         if i_drv is not None:
             absorbed[i_drv] += w_ext
