@@ -35,14 +35,14 @@ from harnesspipe.fe.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import rotate_nodes
 from harnesspipe.fe.shell_bt import (init_shell_state, shell_energies, shell_forces,
                                      shell_lumped_mass)
-from harnesspipe.fe.spatial_hash import box_pairs, node_aabbs, quad_aabbs, segment_aabbs
+from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, node_aabbs, quad_aabbs,
+                                         segment_aabbs)
 from harnesspipe.models import hifi_mesh as hm
 from harnesspipe.models.hifi_parts import Pins, Wires
 from harnesspipe.models.tube_equivalent import from_config as tube_equivalent
 
 FAMILIES = ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive", "damping")
-SEARCH_MARGIN = 0.5      # mm added to every contact bounding box between searches
-MAX_LIGHT_SCALE = 4.0    # cap of the selective shell mass scaling (density factor and nodal factor)
+MAX_LIGHT_SCALE = 16.0   # cap of the selective shell mass scaling (the tape on its bond needs ~13)
 TIE_TOL = {hm.TIE_COVERING: 0.3, hm.TIE_WIRES: 0.5, hm.TIE_TAPE: 0.3}   # mm: facet chord sag / hexagonal bundle under a round band
 
 
@@ -53,7 +53,7 @@ class HifiInputs:
     case: dict                   # config ``cases`` entry
     config: dict                 # the whole config (materials, coverings, three_point)
     interface: dict              # mu_s, mu_k, d_c, K_nn.., mu_rtb, mu_rtp, delta0, delta_f, alpha_d, E2_over_E1
-    explicit: dict               # t_total (profile), t_phys, f_m, safety, mass_damping, penalty, search_every
+    explicit: dict               # t_total (profile), t_phys, f_m, safety, mass_damping, penalty, search_margin
     resolution: dict             # mesh resolution and fibre section (n_rings, n_sectors)
     coverings: dict              # E, sigma_y, K, n per covering (tensile stage)
 
@@ -102,6 +102,9 @@ class HifiSystem:
         ex = inp.explicit
         self.T = float(ex["t_total"])
         self.time_scale = float(ex["t_phys"]) / self.T
+        self.margin = float(ex["search_margin"])
+        self.x_search = None        # positions at the last contact search
+        self.searches = 0
         n = mesh.n_nodes
         self.x = np.ascontiguousarray(mesh.X, dtype=float).copy()
         self.quat = np.zeros((n, 4))
@@ -134,7 +137,6 @@ class HifiSystem:
         self.shell_mass_scale = self._scale_light_shells()
         self.dt0 = 2.0 / np.sqrt(self.node_omega2().max())
         self._setup_contacts()
-        self.calls = 0
         self._unbounded = np.full(3, np.inf)         # pins are infinitely long cylinders
         self.phase = {k: 0.0 for k in ("elements", "contact search", "contact forces", "cohesive")}
         self.pairs_max = 0
@@ -148,11 +150,12 @@ class HifiSystem:
 
         The 0.1 mm PVC tape on its 30 N/mm^3 cohesive bond and the thin tube and fabric
         walls would limit the explicit step well below the wires' bar limit, while all
-        coverings together carry a few per cent of the bundle's mass.  As explicit codes do
-        with target-step mass scaling, (1) the density of each shell part whose elements
-        are faster than the wires is raised by (dt_wires / dt_element)^2, and (2) every
-        shell node whose cohesive springs still make it faster (:meth:`node_omega2`) gets
-        the extra nodal mass that brings it to the wires' step.  Factors are capped at
+        coverings together carry a small part of the bundle's mass.  As explicit codes do
+        with target-step mass scaling, (1) the density of each shell part is raised by the
+        factor that brings its fastest node -- its elements and its cohesive springs
+        together (the rows of :meth:`node_omega2`) -- to the wires' step, and (2) every
+        shell node still faster than that (a heavier part's node under many ties) gets
+        the extra nodal mass that brings it there.  Factors are capped at
         ``MAX_LIGHT_SCALE``; the added mass is reported (``added_mass_fraction``).
         Returns the density factor per part.
         """
@@ -160,27 +163,32 @@ class HifiSystem:
         if not self.has_shells:
             return {}
         dt_w = self.wires.stable_step(self.x)
+        w_target = (2.0 / dt_w) ** 2
         shell_mass = np.zeros_like(self.mass)
         shell_lumped_mass(self.mesh.X, self.sconn, self.sthick, self.srho, shell_mass)
         base = self.mass[:, 0].sum() + shell_mass[:, 0].sum()
-        steps = self._shell_element_steps()
+        w_tie = self._tie_omega2(self.mass[:, 0] + shell_mass[:, 0])
+        w_tie[:self.nw] = 0.0
+        w_el = (2.0 / self._shell_element_steps()) ** 2
         factor = {}
         for p in np.unique(self.mesh.shell_part):
             sel = self.mesh.shell_part == p
-            f = float(np.clip((dt_w / steps[sel].min()) ** 2, 1.0, MAX_LIGHT_SCALE))
+            w_node = np.zeros(self.mesh.n_nodes)
+            np.maximum.at(w_node, self.sconn[sel].ravel(), np.repeat(w_el[sel], 4))
+            nodes = np.unique(self.sconn[sel])
+            f = float(np.clip(np.max(w_node[nodes] + w_tie[nodes]) / w_target, 1.0, MAX_LIGHT_SCALE))
             self.srho[sel] *= f
             factor[hm.PART_NAMES[p]] = f
         shell_lumped_mass(self.mesh.X, self.sconn, self.sthick, self.srho, self.mass)
         nodes = np.unique(self.sconn)
-        w_target = (2.0 / dt_w) ** 2
-        w_el = np.zeros(self.mesh.n_nodes)
+        w_node = np.zeros(self.mesh.n_nodes)
         ws = (2.0 / self._shell_element_steps()) ** 2
         for a in range(4):
-            np.maximum.at(w_el, self.sconn[:, a], ws)
-        w_tie = self.node_omega2() - w_el
+            np.maximum.at(w_node, self.sconn[:, a], ws)
+        w_tie = self.node_omega2() - w_node        # all spring rows: tied nodes and targets
         w_tie[:self.nw] = 0.0
-        need = nodes[w_el[nodes] + w_tie[nodes] > w_target]
-        room = np.maximum(w_target - w_el[need], 1e-12 * w_target)
+        need = nodes[w_node[nodes] + w_tie[nodes] > w_target]
+        room = np.maximum(w_target - w_node[need], 1e-12 * w_target)
         scale = np.clip(w_tie[need] / room, 1.0, MAX_LIGHT_SCALE)
         self.mass[need] *= scale[:, None]
         self.added_mass_fraction = float(self.mass[:, 0].sum() / base - 1.0)
@@ -364,6 +372,15 @@ class HifiSystem:
         w2 = self.node_omega2().max() + 2.0 * self.inp.explicit["penalty"] / self.dt0**2
         return 2.0 / np.sqrt(w2)
 
+    def _tie_omega2(self, m) -> np.ndarray:
+        """Gershgorin row of the cohesive springs at each tied node (masses ``m``): a spring
+        ``k = K A`` between two masses has diagonal + off-diagonal ``2 k / m``."""
+        w2 = np.zeros(self.mesh.n_nodes)
+        for ties in self.ties:
+            np.add.at(w2, ties["tie_node"], 2.0 * np.max(self.K_coh) * ties["tie_area"]
+                      / m[ties["tie_node"]])
+        return w2
+
     def node_omega2(self) -> np.ndarray:
         w2 = np.zeros(self.mesh.n_nodes)
         conn = self.wires.conn
@@ -375,10 +392,9 @@ class HifiSystem:
             for a in range(4):
                 np.maximum.at(w2, self.sconn[:, a], ws)
         m = self.mass[:, 0]
-        for ties in self.ties:
-            # Gershgorin row of a spring k between two masses: diagonal + off-diagonal = 2 k / m
+        w2 += self._tie_omega2(m)
+        for ties in self.ties:       # the springs' rows at their targets' nodes
             k = 2.0 * np.max(self.K_coh) * ties["tie_area"]
-            np.add.at(w2, ties["tie_node"], k / m[ties["tie_node"]])
             if ties["kind"] == "quad":
                 xi, eta = ties["tie_xi"][:, 0], ties["tie_xi"][:, 1]
                 N = 0.25 * np.stack([(1 - xi) * (1 - eta), (1 + xi) * (1 - eta),
@@ -412,16 +428,22 @@ class HifiSystem:
         self.pins.move_to(t)
 
     def _search(self):
-        x, m = self.x, SEARCH_MARGIN
+        """Candidate pairs of every contact set, boxes padded by ``margin``."""
+        x, m = self.x, self.margin
+        self.x_search = x.copy()
+        self.searches += 1
         lo, hi = segment_aabbs(x, self.seg, self.seg_r, m)
         cell = float(np.median(np.max(hi - lo, axis=1)))
         self.ww_pairs = box_pairs(lo, hi, lo, hi, cell, True)
+        p = self.ww_pairs
+        other = self.seg_body[p[:, 0]] != self.seg_body[p[:, 1]]
+        self.ww_hist = ce.fit_slot_history(self.ww_hist, np.min(p[other], axis=1))
         for fs in self.facet_sets:
             self._search_set(fs)
 
     def _search_set(self, fs):
-        lo_n, hi_n = node_aabbs(self.x, fs["nodes"], fs["r"], SEARCH_MARGIN)
-        lo_q, hi_q = quad_aabbs(self.x, fs["quads"], 0.5 * fs["t"], SEARCH_MARGIN)
+        lo_n, hi_n = node_aabbs(self.x, fs["nodes"], fs["r"], self.margin)
+        lo_q, hi_q = quad_aabbs(self.x, fs["quads"], 0.5 * fs["t"], self.margin)
         cell = float(np.median(np.max(hi_q - lo_q, axis=1)))
         fs["pairs"] = box_pairs(lo_n, hi_n, lo_q, hi_q, cell, False)
 
@@ -431,9 +453,8 @@ class HifiSystem:
         F = self.F
         F[...] = 0.0
         t0 = clock()
-        if self.calls % self.inp.explicit["search_every"] == 0:
-            self._search()
-        self.calls += 1
+        if self.x_search is None or max_drift2(self.x, self.x_search) > (0.5 * self.margin) ** 2:
+            self._search()          # some pair may have closed in by a margin: search anew
         t1 = clock()
         self._element_forces(v, dt, F[0])
         t2 = clock()
@@ -519,6 +540,11 @@ class HifiSystem:
         if self.has_shells:
             w += float(shell_energies(self.sstate)[2])
         return w
+
+    def tie_separation_max(self) -> float:
+        """Largest effective separation any cohesive tie reached (its history kappa, mm);
+        damage starts at delta0 (eq. 10)."""
+        return float(max((t["tie_kappa"].max(initial=0.0) for t in self.ties), default=0.0))
 
     def debonded(self) -> int:
         return int(sum(np.sum(t["tie_D"] >= 1.0) for t in self.ties))
@@ -618,9 +644,10 @@ def three_point(inp: HifiInputs, n_shapes: int = 4, settings: DynamicsSettings |
         "energy_error": res.energy_error,
         "n_beam_elements": int(mesh.beam_conn.shape[0]), "n_shell_elements": int(mesh.shell_conn.shape[0]),
         "n_nodes": int(mesh.n_nodes), "n_ties": system.n_ties(),
-        "contact_pairs_max": int(system.pairs_max), "threads": numba.get_num_threads(),
+        "contact_pairs_max": int(system.pairs_max), "contact_searches": system.searches, "threads": numba.get_num_threads(),
         "energies": {k: float(hist[k].iloc[-1]) for k in (*FAMILIES, "KE", "W_ext", "plastic")},
         "debonded_ties": system.debonded(),
+        "tie_separation_max_mm": system.tie_separation_max(),
         "phase_s": {**system.phase, "integrator and bookkeeping": res.wall_s - sum(system.phase.values())},
         "shell_mass_scale": system.shell_mass_scale,
         "added_mass_fraction": system.added_mass_fraction,
