@@ -7,7 +7,7 @@ import pytest
 from harnesspipe.fe.cohesive import cohesive_dissipated_energy
 from harnesspipe.fe.contact_explicit import (
     beam_beam_contact, cohesive_tie_dissipation, cohesive_ties_quad,
-    WW_POINTS, fit_slot_history, make_ties, new_slot_history, node_cylinder_contact,
+    WW_POINTS, chain_cylinder_contact, fit_slot_history, make_ties, new_slot_history, node_cylinder_contact,
     node_facet_contact)
 from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, node_aabbs, quad_aabbs,
                                          segment_aabbs)
@@ -315,6 +315,78 @@ def _facet(x, v, nodes, quads, t, sign, pairs, hp, hf, k_n=100.0, k_t=0.0, dt=1e
                            np.full(len(quads), sign), pairs, k_n, k_t, mu[0], mu[1], mu[2], dt, ts,
                            pen_max, hp, hf, fn, ft)
     return n, fn, ft
+
+
+def _chain(xs, y):
+    """One wire along x through the points (xs, y), nodes 0..n-1, segments consecutive."""
+    x = np.c_[xs, np.broadcast_to(y, xs.shape), np.zeros(len(xs))]
+    seg = np.c_[np.arange(len(xs) - 1), np.arange(1, len(xs))].astype(np.int64)
+    return x, seg
+
+
+def _pin(x, v, seg, hist, k_n=500.0, k_t=0.0, mu=0.3, dt=1e-3, Rc=2.5):
+    fn, ft, fc = _z(len(x)), _z(len(x)), np.zeros((1, 3))
+    n = chain_cylinder_contact(x, v, seg, np.full(len(seg), R_W), np.array([0, len(seg)]), mu,
+                               np.zeros((1, 3)), np.array([[0.0, 0, 1]]), np.array([Rc]),
+                               np.zeros((1, 3)), k_n, k_t, dt, hist, fn, ft, fc)
+    return n, fn, ft, fc
+
+
+def test_wire_resting_on_a_roller_between_its_nodes_is_held():
+    """A wire of 10 mm elements across a 5 mm roller, nodes 3.5 and 6.5 mm from its axis: the
+    nodes alone never touch it (the wire would fall through); the chain contact carries the
+    load at the closest point, shared by the segment's nodes by (1 - s, s)."""
+    Rc, pen, k_n = 2.5, 0.02, 500.0
+    x, seg = _chain(np.array([-16.5, -6.5, 3.5, 13.5]), Rc + R_W - pen)
+    hist = np.zeros((1, 1, 3))
+    n, fn, _, fc = _pin(x, _z(4), seg, hist, k_n=k_n)
+    assert n == 1
+    assert fn[:, 1].sum() == pytest.approx(k_n * pen, rel=1e-9)
+    assert fn[1, 1] == pytest.approx(0.35 * k_n * pen) and fn[2, 1] == pytest.approx(0.65 * k_n * pen)
+    assert np.allclose(fc[0], -fn[:, :3].sum(axis=0))
+    nodes_only = node_cylinder_contact(x, _z(4), np.arange(4), np.full(4, R_W), np.full(4, 0.3),
+                                       np.zeros((1, 3)), np.array([[0.0, 0, 1]]), np.array([Rc]),
+                                       np.array([np.inf]), np.zeros((1, 3)), k_n, 0.0, 1e-3,
+                                       np.zeros((4, 1, 3)), _z(4), _z(4), np.zeros((1, 3)))
+    assert nodes_only == 0
+
+
+def test_bent_wire_sliding_over_a_roller_makes_no_energy():
+    """A kinked wire pressed onto a roller and slid across it and back: the normal forces do
+    no net work over the closed path (the chain's distance to the axis is a potential),
+    while they do work on each half."""
+    Rc, k_n = 2.5, 500.0
+    xs = np.array([-8.0, 0.0, 8.0, 16.0])
+    y = Rc + R_W + np.array([0.6, -0.2, 0.1, 0.8])       # bent: the kink sags onto the roller
+    hist = np.zeros((1, 1, 3))
+    path = np.r_[np.linspace(-6.0, 0.0, 3001), np.linspace(0.0, -6.0, 3001)[1:]]
+    W = 0.0
+    W_half = 0.0
+    f_prev = None
+    for i, ox in enumerate(path):
+        x, seg = _chain(xs + ox, y)
+        _, fn, _, _ = _pin(x, _z(4), seg, hist, k_n=k_n)
+        if f_prev is not None:
+            W += 0.5 * (fn[:, 0] + f_prev).sum() * (ox - path[i - 1])
+        f_prev = fn[:, 0].copy()
+        if i == 3000:
+            W_half = W
+    assert abs(W_half) > 1.0                           # N mm: the contact stores and returns energy
+    assert abs(W) < 1e-4 * abs(W_half)
+
+
+def test_wire_dragged_over_a_roller_slips_at_mu_n():
+    Rc, pen, k_n, k_t, mu, dt, V = 2.5, 0.02, 500.0, 300.0, 0.3, 1e-3, 1.0
+    hist = np.zeros((1, 1, 3))
+    v = _z(4)
+    v[:, 0] = V
+    for step in range(100):
+        x, seg = _chain(np.array([-16.5, -6.5, 3.5, 13.5]) + V * dt * step, Rc + R_W - pen)
+        _, fn, ft, fc = _pin(x, v, seg, hist, k_n=k_n, k_t=k_t, mu=mu, dt=dt)
+        if step == 0:                                  # stick: k_t times the slip
+            assert ft[:, 0].sum() == pytest.approx(-k_t * V * dt)
+    assert ft[:, 0].sum() == pytest.approx(-mu * k_n * pen, rel=1e-9)
+    assert np.allclose(fc[0], -(fn + ft)[:, :3].sum(axis=0))
 
 
 def test_node_on_facet_normal_edge_partition_and_one_sided():

@@ -5,6 +5,8 @@ Interactions of the 3-point bending model of a wire bundle (eqs. 6-10):
 (a) ``beam_beam_contact``     wire-wire, penalty normal + eq. 6 friction;
 (b) ``node_cylinder_contact`` nodes against rigid cylinders (rollers, loading pin),
                               constant-mu Coulomb per node, reaction on each cylinder;
+    ``chain_cylinder_contact`` beam chains (wires) against the same cylinders: one
+                              contact per (wire, cylinder) at the wire's closest point;
 (c) ``node_facet_contact``    nodes (wires) against shell quads (tube, tape), one-sided,
                               eq. 6 friction;
 (d) ``cohesive_ties_quad`` / ``cohesive_ties_beam``  tape bonded to the tube / the wires by
@@ -34,7 +36,8 @@ arrays are updated IN PLACE.  Do not call a kernel twice for the same step.
   hold exactly the contacts active in that call (an inactive pair forgets its friction).
   A contact whose partner changes to an ADJACENT element (shares a node: sliding onto the
   next element) inherits the old partner's force.  At most MAXS partners per owner are
-  remembered (an overflowing contact still acts, but restarts from zero friction).
+  remembered (an overflowing contact still acts, but restarts from zero friction): size
+  the history with :func:`fit_slot_history` after every search.
 * Friction force at the current step: ``f_old`` is rotated onto the current tangent
   plane (projected and rescaled to keep its magnitude), then
   ``rate_dependent_friction`` / ``coulomb_return_map`` of :mod:`harnesspipe.fe.friction`.
@@ -758,6 +761,105 @@ def _cyl_range(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, cyl_half_le
                 hist_ft[i, c, k] = fnew[k]
                 f_t[nd, k] -= fnew[k]
                 work[i, c, k] += fnew[k]
+
+
+@njit(cache=True)
+def _chain_closest(x, seg, seg_r, e0, e1, c0, ax, R):
+    """Closest point of the segments e0..e1-1 of a chain to the axis line (point ``c0``,
+    unit ``ax``): ``(gap, e, s)`` with gap = distance - R - r_e (smallest over the chain)."""
+    best = np.inf
+    e_best = -1
+    s_best = 0.0
+    for e in range(e0, e1):
+        a = seg[e, 0]
+        b = seg[e, 1]
+        ta = (x[a, 0] - c0[0]) * ax[0] + (x[a, 1] - c0[1]) * ax[1] + (x[a, 2] - c0[2]) * ax[2]
+        tb = (x[b, 0] - c0[0]) * ax[0] + (x[b, 1] - c0[1]) * ax[1] + (x[b, 2] - c0[2]) * ax[2]
+        qa0 = x[a, 0] - c0[0] - ta * ax[0]          # radial offsets of the ends from the axis
+        qa1 = x[a, 1] - c0[1] - ta * ax[1]
+        qa2 = x[a, 2] - c0[2] - ta * ax[2]
+        dq0 = x[b, 0] - c0[0] - tb * ax[0] - qa0
+        dq1 = x[b, 1] - c0[1] - tb * ax[1] - qa1
+        dq2 = x[b, 2] - c0[2] - tb * ax[2] - qa2
+        dd = dq0 * dq0 + dq1 * dq1 + dq2 * dq2
+        s = min(1.0, max(0.0, -(qa0 * dq0 + qa1 * dq1 + qa2 * dq2) / dd)) if dd > 0.0 else 0.0
+        d2 = (qa0 + s * dq0) ** 2 + (qa1 + s * dq1) ** 2 + (qa2 + s * dq2) ** 2
+        gap = math.sqrt(d2) - R - seg_r[e]
+        if gap < best:
+            best = gap
+            e_best = e
+            s_best = s
+    return best, e_best, s_best
+
+
+@njit(cache=True)
+def chain_cylinder_contact(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, cyl_R, cyl_v,
+                           k_n, k_t, dt, hist_ft, f_n, f_t, f_cyl):
+    """Penalty contact of beam chains (wires) with rigid unbounded cylinders, Coulomb friction.
+
+    A wire meets a 5 mm pin over a few millimetres, less than its element length: nodes
+    alone (:func:`node_cylinder_contact`) let a wire whose nodes straddle a roller fall
+    through it.  Here each chain (the segments ``chain_start[w] .. chain_start[w + 1] - 1``
+    of ``seg``, consecutive along the wire) touches each cylinder at most once, at the point
+    of the chain closest to the cylinder's axis: gap ``g = min over the chain of (distance
+    to the axis - R - r)``, normal force ``k_n max(-g, 0)`` along the radial direction,
+    shared by the segment's end nodes with the weights ``(1 - s, s)``.  The minimum distance
+    of a polyline to a line is continuous and its gradient is the unit radial vector at the
+    closest point, so the penalty energy ``1/2 k_n g^2`` is a potential (no energy made as a
+    bent wire slides over a roller).  Friction: Coulomb with ``mu`` (constant, the pins'
+    mu_rtb), stick penalty ``k_t``, history ``hist_ft`` (n_chains, n_cyl, 3) in place (reset
+    when the contact opens).  ``f_cyl`` (n_cyl, 3): force ON each cylinder, ADDED.
+    Returns the number of active (chain, cylinder) contacts.
+    """
+    n_cyl = cyl_c.shape[0]
+    nv = np.empty(3)
+    dg = np.empty(3)
+    fold = np.empty(3)
+    fnew = np.empty(3)
+    ds = np.empty(3)
+    n_active = 0
+    for w in range(chain_start.shape[0] - 1):
+        for c in range(n_cyl):
+            ax = cyl_axis[c]
+            gap, e, s = _chain_closest(x, seg, seg_r, chain_start[w], chain_start[w + 1],
+                                       cyl_c[c], ax, cyl_R[c])
+            if not gap < 0.0:
+                for k in range(3):
+                    hist_ft[w, c, k] = 0.0
+                continue
+            n_active += 1
+            a = seg[e, 0]
+            b = seg[e, 1]
+            for k in range(3):
+                nv[k] = (1.0 - s) * x[a, k] + s * x[b, k] - cyl_c[c, k]
+            al = _dot(nv, ax)
+            for k in range(3):
+                nv[k] -= al * ax[k]
+            dist = math.sqrt(_dot(nv, nv))
+            for k in range(3):
+                nv[k] /= dist
+            pn = -k_n * gap
+            for k in range(3):
+                fnk = pn * nv[k]
+                f_n[a, k] += (1.0 - s) * fnk
+                f_n[b, k] += s * fnk
+                f_cyl[c, k] -= fnk
+            if k_t <= 0.0 or mu <= 0.0:
+                continue
+            for k in range(3):
+                fold[k] = hist_ft[w, c, k]
+                dg[k] = dt * ((1.0 - s) * v[a, k] + s * v[b, k] - cyl_v[c, k])
+            _rotate_onto_plane(fold, nv)
+            dgn = _dot(dg, nv)
+            for k in range(3):
+                dg[k] -= dgn * nv[k]
+            coulomb_return_map(fold, dg, k_t, mu, pn, fnew, ds)
+            for k in range(3):
+                hist_ft[w, c, k] = fnew[k]
+                f_t[a, k] -= (1.0 - s) * fnew[k]
+                f_t[b, k] -= s * fnew[k]
+                f_cyl[c, k] += fnew[k]
+    return n_active
 
 
 # ------------------------------------------------------ (c) nodes on shell facets (quads)

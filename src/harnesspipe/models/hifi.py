@@ -204,7 +204,8 @@ class HifiSystem:
         self.k_ww = self._penalty(m[:self.nw])
         self.ww_hist = ce.new_slot_history(self.seg.shape[0], points=ce.WW_POINTS)
         self.ww_pairs = np.zeros((0, 2), dtype=np.int64)
-        # pins: one node group per friction coefficient (own penalty from its lightest node)
+        # pins: the wires as chains; shell nodes in one group per friction coefficient (own
+        # penalty from the group's lightest node)
         part_nodes = {}
         if self.has_shells:
             for part in (hm.PART_TUBE, hm.PART_FABRIC, hm.PART_TAPE):
@@ -217,7 +218,8 @@ class HifiSystem:
                     part_nodes[part] = (nodes, r)
         wn = np.arange(self.nw, dtype=np.int64)
         wr = mesh.wire_radius[np.repeat(np.arange(mesh.n_wires), mesh.wire_nodes.shape[1])]
-        groups = [(wn, wr, itf["mu_rtb"])]
+        self.wire_pins = self._wire_pin_contact(m)
+        groups = []
         for part, (nodes, r) in part_nodes.items():
             mu = itf["mu_rtp"] if part == hm.PART_TAPE else itf["mu_rtb"]
             groups.append((nodes[~np.isin(nodes, wn)], r[~np.isin(nodes, wn)], mu))
@@ -244,6 +246,17 @@ class HifiSystem:
                 self._facet_set(mesh.fabric_overlap_outer.astype(np.int64), r, inner, 1.0)
             if mesh.cut_pairs.size:
                 self._cut_contact()
+
+    def _wire_pin_contact(self, m) -> dict:
+        """The wires against the pins as chains (:func:`ce.chain_cylinder_contact`): the
+        segments of each wire run consecutively along it in ``seg``."""
+        body = self.seg_body
+        if np.any(np.diff(body) < 0) or np.any(self.seg[1:, 0][body[1:] == body[:-1]]
+                                                != self.seg[:-1, 1][body[1:] == body[:-1]]):
+            raise ValueError("hi-fi mesh: wire segments must run consecutively along each wire")
+        start = np.searchsorted(body, np.arange(self.mesh.n_wires + 1)).astype(np.int64)
+        return dict(start=start, mu=float(self.inp.interface["mu_rtb"]),
+                    k=self._penalty(m[:self.nw]), hist=np.zeros((self.mesh.n_wires, 3, 3)))
 
     def _cut_contact(self):
         """Self-contact across the open tube's cut (node pairs ``a`` at phi = 0, ``b`` at
@@ -500,6 +513,10 @@ class HifiSystem:
                                             fs["hist"][0], fs["hist"][1], fn, ft)
         p = self.pins
         p.force[...] = 0.0
+        w = self.wire_pins
+        active += ce.chain_cylinder_contact(self.x, v, self.seg, self.seg_r, w["start"], w["mu"],
+                                            p.centres, p.axes, p.radii, p.velocity, w["k"],
+                                            w["k"], dt, w["hist"], pn, pt, p.force)
         for g in self.pin_groups:
             active += ce.node_cylinder_contact(self.x, v, g["nodes"], g["r"], g["mu"], p.centres,
                                                p.axes, p.radii, self._unbounded, p.velocity,
