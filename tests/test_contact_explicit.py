@@ -421,10 +421,29 @@ def test_node_behind_a_free_edge_is_not_grabbed():
         x = np.vstack([xp, [[xx, 0.0, -0.1]]])      # 0.1 mm behind the mid-surface
         assert _facet(x, _z(len(x)), np.array([len(xp)]), quads, t, 1.0, pairs, hp, hf)[0] == 0
     hp, hf = new_slot_history(1, 8)
-    for z in (R_W + t / 2 - 0.05, 0.2, -0.1):      # in from the front, through the mid-surface
+    for z in (R_W + t / 2 - 0.02, 0.2, -0.1):      # in from the front, through the mid-surface
         x = np.vstack([xp, [[1.5, 0.0, z]]])
         n, fn, _ = _facet(x, _z(len(x)), np.array([len(xp)]), quads, t, 1.0, pairs, hp, hf)
         assert n == 1 and fn[-1, 2] == pytest.approx(k_n * (R_W + t / 2 - z), rel=1e-9)
+
+
+def test_node_facet_contact_begins_only_at_the_surface():
+    """A node found deep inside the plate's contact zone without having touched it at the
+    previous step is on the other side (a contact begins at the surface: no energy made
+    at once); one that came in from the surface stays pushed out however deep it goes."""
+    xp, quads = _plate(2, 4.0)
+    t, k_n = 0.27, 100.0
+    pairs = np.array([[0, q] for q in range(4)])
+    top = R_W + t / 2
+    x = np.vstack([xp, [[0.5, 0.5, top - 0.3]]])
+    hp, hf = new_slot_history(1, 8)
+    assert _facet(x, _z(len(x)), np.array([len(xp)]), quads, t, 1.0, pairs, hp, hf)[0] == 0
+    hp, hf = new_slot_history(1, 8)
+    for z in np.arange(top + 0.01, top - 0.31, -0.01):
+        x = np.vstack([xp, [[0.5, 0.5, z]]])
+        n, fn, _ = _facet(x, _z(len(x)), np.array([len(xp)]), quads, t, 1.0, pairs, hp, hf)
+        assert n == (1 if z < top else 0)
+        assert fn[-1, 2] == pytest.approx(k_n * max(top - z, 0.0), rel=1e-9, abs=1e-12)
 
 
 def test_node_sliding_on_facet_eq6_rate_and_dissipation():

@@ -65,6 +65,7 @@ EDGE_TOL = 0.05         # half width (in xi) of the partition-of-unity band at q
 DEFAULT_MAXS = 8
 CHUNK = 64              # items per parallel task (scratch arrays are allocated per task)
 SERIAL_MAX_CHUNKS = 2   # up to this many tasks a loop runs serially (no parallel-region cost)
+ENTRY_FRACTION = 0.05    # node-facet: a contact begins at most this far (x (r + t/2)) inside the surface
 REJECT_TOL = 1e-9       # relative slack of the early distance rejects (round-off of the points)
 
 
@@ -899,7 +900,12 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
     interior is pushed along the facet normal, up to the penetration ``pen_max``, provided it
     was in contact with the set at the previous step (``hist_partner[i, 0] >= 0``: it went in
     from the front); behind the plane but beside the facet (closest point on its boundary: a
-    wire beyond the tube's end, an open cut's edge) is no contact.  Without the history rule a
+    wire beyond the tube's end, an open cut's edge) is no contact.  More generally a node that
+    was not in contact at the previous step begins a contact only at the surface: with a
+    penetration up to ``ENTRY_FRACTION (r + t/2)`` (a step's approach is far less); deeper,
+    it is on the other side.  Otherwise a node that passed behind the mid-surface beyond
+    ``pen_max`` (or around a free edge) met its whole penetration at once on its way back --
+    measured as 9 N mm made in one step by the fabric's overlap self-contact.  Without the history rule a
     node beside a FREE edge of the set and behind its plane (the next fabric layer of a spiral
     where the set's quads stop) met its whole penetration at once when it slid over the facet,
     and was pushed out with energy never stored.  Limitation: one contact per node and
@@ -945,7 +951,9 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
         p = best[i]
         q = pairs[p, 1] if p >= 0 else -1
         gap = pd[p, 2] - node_r[i] - 0.5 * quad_t[q] if p >= 0 else 0.0
-        if p < 0 or gap >= 0.0 or -gap > pen_max:
+        entering = hist_partner[i, 0] < 0
+        if (p < 0 or gap >= 0.0 or -gap > pen_max
+                or (entering and -gap > ENTRY_FRACTION * (node_r[i] + 0.5 * quad_t[q]))):
             for s in range(maxs):
                 hist_partner[i, s] = -1
             continue
