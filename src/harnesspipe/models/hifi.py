@@ -194,9 +194,10 @@ class HifiSystem:
         self.added_mass_fraction = float(self.mass[:, 0].sum() / base - 1.0)
         return factor
 
-    def _penalty(self, masses) -> float:
-        """k = penalty m / dt^2: omega dt = sqrt(penalty) per contact, explicit-stable."""
-        return self.inp.explicit["penalty"] * float(np.min(masses)) / self.dt0**2
+    def _penalty(self, masses, key: str = "penalty") -> float:
+        """k = penalty m / dt^2: omega dt = sqrt(penalty) per contact, explicit-stable
+        (``key``: the config's ``penalty``, or ``penalty_layers`` for the fabric's layers)."""
+        return self.inp.explicit[key] * float(np.min(masses)) / self.dt0**2
 
     def _setup_contacts(self):
         mesh, itf = self.mesh, self.inp.interface
@@ -243,7 +244,8 @@ class HifiSystem:
             if mesh.fabric_overlap_outer.size:
                 inner = np.flatnonzero(np.all(np.isin(self.sconn, mesh.fabric_overlap_inner), axis=1))
                 r = np.full(mesh.fabric_overlap_outer.size, 0.2)   # < half the 0.48 layer gap
-                self._facet_set(mesh.fabric_overlap_outer.astype(np.int64), r, inner, 1.0)
+                self._facet_set(mesh.fabric_overlap_outer.astype(np.int64), r, inner, 1.0,
+                                "penalty_layers")
             if mesh.cut_pairs.size:
                 self._cut_contact()
 
@@ -288,11 +290,11 @@ class HifiSystem:
         np.subtract.at(fn[:, :3], b[on], f)
         return int(on.sum())
 
-    def _facet_set(self, nodes, r, quads, sign):
+    def _facet_set(self, nodes, r, quads, sign, penalty="penalty"):
         itf = self.inp.interface
         q = np.ascontiguousarray(self.sconn[quads])
         qn = np.unique(q)
-        k = self._penalty(np.r_[self.mass[nodes, 0], self.mass[qn, 0]])
+        k = self._penalty(np.r_[self.mass[nodes, 0], self.mass[qn, 0]], penalty)
         t = np.ascontiguousarray(self.mesh.shell_thickness[quads], dtype=float)
         fs = dict(nodes=np.ascontiguousarray(nodes, dtype=np.int64),
                   r=np.ascontiguousarray(r, float).copy(), quads=q, t=t,

@@ -18,7 +18,8 @@ from harnesspipe.config import ConfigError
 #: keys of ``--set`` and their place: interface/explicit parameters, resolution, coverings
 INTERFACE_KEYS = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1", "mu_s",
                   "mu_k", "d_c", "K_nn", "K_ss", "K_tt")
-EXPLICIT_KEYS = ("t_total", "f_m", "safety", "mass_damping", "penalty", "search_margin")
+EXPLICIT_KEYS = ("t_total", "f_m", "safety", "mass_damping", "penalty", "penalty_layers",
+                "search_margin")
 COVERINGS = ("closed_tube", "open_tube", "fabric_tube")
 
 
