@@ -123,6 +123,8 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3, help="timed runs per profile")
     parser.add_argument("--profiles", nargs="+", default=["quick", "default"])
     parser.add_argument("--convergence", action="store_true")
+    parser.add_argument("--threads", type=int, default=1,
+                        help="Numba threads (1: the fastest on 2 cores, as the rules run it)")
     parser.add_argument("--crosscheck", type=Path, default=None, metavar="DIR",
                         help="only write the cross-check section from DIR (results/hifi/crosscheck)")
     args = parser.parse_args()
@@ -132,6 +134,7 @@ def main() -> None:
         print(text)
         return
     import numba
+    numba.set_num_threads(args.threads)                # one thread: see "Threads" in RESULTS.md
     warm_up()                                          # JIT, not timed
     lines = [HEADING, "",
              f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "

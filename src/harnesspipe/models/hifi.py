@@ -141,7 +141,9 @@ class HifiSystem:
         self.phase = {k: 0.0 for k in ("elements", "contact search", "contact forces", "cohesive")}
         self.pairs_max = 0
         self.active = 0
-        self.f_pin_prev = np.zeros(3)
+        self.f_pin_prev = np.zeros_like(self.pins.force)
+        self.impulse = np.zeros_like(self.pins.force)
+        self.impulse_u = self.impulse_time = self.u_prev = 0.0
         self.c_prev = self.pins.centres.copy()
 
     # -- set-up -----------------------------------------------------------------
@@ -542,9 +544,15 @@ class HifiSystem:
                                       ties["tie_kappa"], ties["tie_D"], ties["tie_energy"], fc)
 
     def external_work(self, t0, t1) -> float:
-        """Work of the pins on the system: F_on_system = -force on the pin."""
+        """Work of the pins on the system: F_on_system = -force on the pin.  Also adds the
+        step's impulse of the pin forces (trapezoidal) for :meth:`observe`."""
         dc = self.pins.centres - self.c_prev
         w = -0.5 * float(np.sum((self.f_pin_prev + self.pins.force) * dc))
+        u = self.pins.feeder_displacement()
+        self.impulse += 0.5 * (t1 - t0) * (self.f_pin_prev + self.pins.force)
+        self.impulse_u += 0.5 * (t1 - t0) * (self.u_prev + u)
+        self.impulse_time += t1 - t0
+        self.u_prev = u
         self.f_pin_prev = self.pins.force.copy()
         return w
 
@@ -569,9 +577,20 @@ class HifiSystem:
         return int(sum(np.sum(t["tie_D"] >= 1.0) for t in self.ties))
 
     def observe(self, t) -> dict:
+        """History row.  ``force_N`` (feeder), ``roller_force_N`` and ``deflection_mm`` are
+        MEANS since the previous row (impulse / time), as a load cell averages: the
+        instantaneous penalty contact force chatters at the contact frequency
+        (``force_N_instant``, ``deflection_mm_end``)."""
         p = self.pins
-        return {"deflection_mm": p.feeder_displacement(), "force_N": float(p.force[p.feeder, 1]),
-                "roller_force_N": float(-p.force[:p.feeder, 1].sum()),
+        span = self.impulse_time
+        f = self.impulse / span if span > 0.0 else p.force
+        u = self.impulse_u / span if span > 0.0 else p.feeder_displacement()
+        self.impulse = np.zeros_like(p.force)
+        self.impulse_u = self.impulse_time = 0.0
+        return {"deflection_mm": u, "deflection_mm_end": p.feeder_displacement(),
+                "force_N": float(f[p.feeder, 1]),
+                "roller_force_N": float(-f[:p.feeder, 1].sum()),
+                "force_N_instant": float(p.force[p.feeder, 1]),
                 "plastic": self.plastic_work(), "contacts": self.active,
                 "debonded_ties": self.debonded()}
 
