@@ -119,6 +119,17 @@ def _rotate_onto_plane(f, n):
 
 
 @njit(cache=True)
+def _to_tangent_plane(f_old, dg, n):
+    """Friction inputs on the current tangent plane (unit normal ``n``), in place: the
+    committed force ``f_old`` rotated onto it (:func:`_rotate_onto_plane`), the slip
+    increment ``dg`` projected on it."""
+    _rotate_onto_plane(f_old, n)
+    dgn = _dot(dg, n)
+    for k in range(3):
+        dg[k] -= dgn * n[k]
+
+
+@njit(cache=True)
 def _any_perpendicular(d, out):
     """A unit vector normal to ``d``."""
     ax = 0
@@ -644,10 +655,7 @@ def _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k
                 fold[c] = hist_ft[a, slot, k, c] if slot >= 0 else 0.0
                 dg[c] = dt * ((1 - s) * v[a0, c] + s * v[a1, c]
                               - (1 - u) * v[b0, c] - u * v[b1, c])
-            _rotate_onto_plane(fold, nv)
-            dgn = _dot(dg, nv)
-            for c in range(3):
-                dg[c] -= dgn * nv[c]
+            _to_tangent_plane(fold, dg, nv)
             rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew[j, k], ds)
             for c in range(3):
                 pft[j, k, c] = -w * hnew[j, k, c]
@@ -753,10 +761,7 @@ def _cyl_range(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, cyl_half_le
             for k in range(3):
                 fold[k] = hist_ft[i, c, k]
                 dg[k] = dt * (v[nd, k] - cyl_v[c, k])
-            _rotate_onto_plane(fold, nv)
-            dgn = _dot(dg, nv)
-            for k in range(3):
-                dg[k] -= dgn * nv[k]
+            _to_tangent_plane(fold, dg, nv)
             coulomb_return_map(fold, dg, k_t, node_mu[i], pn, fnew, ds)
             for k in range(3):
                 hist_ft[i, c, k] = fnew[k]
@@ -850,10 +855,7 @@ def chain_cylinder_contact(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, c
             for k in range(3):
                 fold[k] = hist_ft[w, c, k]
                 dg[k] = dt * ((1.0 - s) * v[a, k] + s * v[b, k] - cyl_v[c, k])
-            _rotate_onto_plane(fold, nv)
-            dgn = _dot(dg, nv)
-            for k in range(3):
-                dg[k] -= dgn * nv[k]
+            _to_tangent_plane(fold, dg, nv)
             coulomb_return_map(fold, dg, k_t, mu, pn, fnew, ds)
             for k in range(3):
                 hist_ft[w, c, k] = fnew[k]
@@ -977,10 +979,7 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
                 for m in range(4):
                     vq += N[m] * v[quads[q, m], c]
                 dg[c] = dt * (v[nd, c] - vq)
-            _rotate_onto_plane(fold, nv)
-            dgn = _dot(dg, nv)
-            for c in range(3):
-                dg[c] -= dgn * nv[c]
+            _to_tangent_plane(fold, dg, nv)
             rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew, ds)
         for s in range(maxs):
             hist_partner[i, s] = -1
