@@ -87,7 +87,7 @@ class DynamicsSettings:
     safety: float = 0.8             # dt = safety * stable step
     recheck_every: int = 500        # steps between stable-step rechecks (mesh deforms)
     ke_ie_from: float = 0.1         # KE/IE monitored for t > ke_ie_from T (after the ramp)
-    energy_tol: float = 0.05        # stop when the balance error > energy_tol W_ext + floor
+    energy_stop: float = 0.5        # stop when the balance error > energy_stop |W_ext| + floor
     energy_floor: float = 1e-3      # N mm
     max_displacement: float = 1e3   # mm
     n_output: int = 200             # history rows
@@ -99,7 +99,7 @@ class DynamicsResult:
     dt: float
     n_steps: int
     ke_ie_max: float                # max KE / IE_elements for t > ke_ie_from T
-    energy_error: float             # max |balance| / W_ext for t > ke_ie_from T
+    energy_error: float             # max |balance| over the run / |W_ext| at its end
     wall_s: float
 
 
@@ -111,6 +111,16 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
     the KE/IE check.  ``on_output(step, t)`` is called at every history row (shapes).
     The step is ``safety x stable_step()``, rechecked every ``recheck_every`` steps and
     lowered (never raised) when the mesh has deformed.
+
+    Energy balance.  With the trapezoidal work of a step h, velocity Verlet satisfies
+    ``KE_n+1 - KE_n = sum_p W_p + h^2/8 (|F_n+1|^2 - |F_n|^2)_M^-1`` (``|F|^2_M^-1 =
+    sum F^2 / m`` over the free dofs), so the balance error is this term, summed: it
+    does not accumulate in a stable run but is a few per cent of a still small ``W_ext``
+    after an impact (a penalty contact closing on light nodes), and it grows without
+    bound when the run goes unstable.  Hence two figures: the run stops (a blow-up) when
+    the balance error exceeds ``energy_stop`` |W_ext| + ``energy_floor`` at any step, and
+    the reported ``energy_error`` is the largest balance error of the run relative to
+    the external work at its end (the energy scale of the test), which callers judge.
     """
     t0 = time.perf_counter()
     names = tuple(system.families)
@@ -127,7 +137,7 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
     F = system.forces(0.0, v, dt).copy()
     system.commit()
     w_ext = 0.0
-    ke_ie = err_max = 0.0
+    ke_ie = bal_max = 0.0
     t = 0.0
     step = 0
     out_dt = total_time / settings.n_output
@@ -154,15 +164,15 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
         balance = abs(ke + absorbed.sum() - w_ext)
         if not np.isfinite(balance):
             raise ExplicitError("non-finite state", step, t, ke, absorbed[i_int], w_ext, h)
-        if balance > settings.energy_tol * abs(w_ext) + settings.energy_floor:
-            raise ExplicitError(f"energy balance error {balance:.4g} > {settings.energy_tol:g} "
+        if balance > settings.energy_stop * abs(w_ext) + settings.energy_floor:
+            raise ExplicitError(f"energy balance error {balance:.4g} > {settings.energy_stop:g} "
                                 f"|W_ext| + {settings.energy_floor:g}", step, t, ke,
                                 absorbed[i_int], w_ext, h)
+        bal_max = max(bal_max, balance)
         if t > settings.ke_ie_from * total_time:
             ie = absorbed[i_int]
             if ie > 0.0:
                 ke_ie = max(ke_ie, ke / ie)
-            err_max = max(err_max, balance / max(abs(w_ext), settings.energy_floor))
         if t >= next_out - 1e-12 * total_time or t >= total_time * (1.0 - 1e-12):
             umax = system.displacement_max()
             if umax > settings.max_displacement:
@@ -173,7 +183,8 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
             if on_output is not None:
                 on_output(step, t)
     history = pd.DataFrame(rows)
-    return DynamicsResult(history, dt, step, ke_ie, err_max, time.perf_counter() - t0)
+    err = bal_max / max(abs(w_ext), settings.energy_floor)
+    return DynamicsResult(history, dt, step, ke_ie, err, time.perf_counter() - t0)
 
 
 def _row(t, ke, absorbed, w_ext, names, extra):
