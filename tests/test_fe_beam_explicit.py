@@ -43,7 +43,7 @@ def test_parallel_forces_equal_assembled_beams_per_body():
     half = n_el // 2
     sec_id = np.repeat([0, 1], half).astype(np.int64)
     ng, nf = xi.size, secs[0][0].size
-    hist = [np.zeros((n_el, ng, nf)) for _ in range(4)]
+    hist = [np.zeros((n_el, ng, nf)) for _ in range(6)]   # committed and trial eps_p, alpha, alpha^n
     f_el = np.zeros((n_el, 12))
     f_int = np.zeros((X.shape[0], 6))
     sec = [np.ascontiguousarray(np.stack([s[k] for s in secs])) for k in range(3)]
@@ -60,10 +60,11 @@ def test_parallel_forces_equal_assembled_beams_per_body():
         nodes = np.unique(conn[sl])
         np.testing.assert_allclose(f_int[nodes].ravel(), f.reshape(-1, 6)[nodes].ravel(),
                                    rtol=1e-12, atol=1e-10)
-        np.testing.assert_array_equal(hist[3][sl], h[3])
+        np.testing.assert_array_equal(hist[4][sl], h[3])        # trial alpha
+        np.testing.assert_allclose(hist[5][sl], h[3] ** mats[body, 3], rtol=1e-13)   # alpha^n
     assert np.abs(f_int).max() > 1.0            # the state is strained (yielded)
-    assert hist[3].max() > 0.0
-    W = beam_plastic_work(conn, X, w, sec[2], sec_id, mats, sec_id, hist[3])
+    assert hist[4].max() > 0.0
+    W = beam_plastic_work(conn, X, w, sec[2], sec_id, mats, sec_id, hist[4])
     assert W > 0.0
 
 
@@ -87,7 +88,7 @@ def test_lumped_mass_total_and_stable_step_bounds_a_free_vibration():
         mats = np.array([[E, 1e9, 0.0, 1.0]])
         ids = np.zeros(n_el, dtype=np.int64)
         R0 = initial_frames(X, conn)
-        hist = [np.zeros((n_el, 3, y.size)) for _ in range(4)]
+        hist = [np.zeros((n_el, 3, y.size)) for _ in range(6)]
         x = X.copy()
         quat = np.zeros((X.shape[0], 4))
         quat[:, 0] = 1.0
@@ -161,20 +162,21 @@ def test_lean_forces_equal_element_response_at_large_rotations_with_yielding(see
     ng, nf = xi.size, sec[0].shape[1]
     alpha_c = np.where(rng.random((n_el, ng, nf)) < 0.5, rng.random((n_el, ng, nf)) * 5e-3, 0.0)
     eps_p_c = alpha_c * rng.choice([-1.0, 1.0], size=alpha_c.shape) * rng.random(alpha_c.shape)
+    sa_c = alpha_c ** mats[mat_id, 3][:, None, None]           # the flow-stress history
     out = []
     for fun, nch in ((beam_forces, 2), (beam_forces_reference, 2), (beam_forces, 1)):
-        h = [np.zeros((n_el, ng, nf)), np.zeros((n_el, ng, nf))]
+        h = [np.zeros((n_el, ng, nf)) for _ in range(3)]
         f_el = np.zeros((n_el, 12))
         f = np.zeros((X.shape[0], 6))
-        fun(X, conn, R0, x, quat, xi, w, *sec, GJ, sec_id, mats, mat_id, eps_p_c, alpha_c,
-            h[0], h[1], f_el, f, nch)
+        fun(X, conn, R0, x, quat, xi, w, *sec, GJ, sec_id, mats, mat_id, eps_p_c, alpha_c, sa_c,
+            *h, f_el, f, nch)
         out.append((f_el, f, h))
     (fe, f, h), (fe_r, f_r, h_r), (fe_1, f_1, h_1) = out
     scale = np.abs(fe_r).max(axis=1, keepdims=True)
     assert np.all(np.abs(fe - fe_r) <= 1e-12 * scale)          # per element, 1e-12 relative
     assert np.abs(f - f_r).max() <= 1e-12 * np.abs(f_r).max()
-    np.testing.assert_array_equal(h[0], h_r[0])                 # same return map, same strains
-    np.testing.assert_array_equal(h[1], h_r[1])
+    for k in range(3):                                          # same return map, same strains
+        np.testing.assert_allclose(h[k], h_r[k], rtol=1e-13, atol=1e-18)
     np.testing.assert_array_equal(fe_1, fe)                     # chunking does not matter
     assert (h[1] > alpha_c).sum() > 20                          # fibres yield in this step
     # the state has large local rotations (Ts^-1, eta terms matter)

@@ -44,40 +44,42 @@ from harnesspipe.fe.explicit import ExplicitError
 
 
 @njit(cache=True)
-def half_kick(v, F, minv, free, hdt):
-    """v += hdt M^-1 sum_p F_p on the free dofs; returns nothing."""
-    P, n, k = F.shape
+def half_kick(v, f, minv, free, hdt):
+    """v += hdt M^-1 f on the free dofs (``f`` (n, 6) the total force); returns nothing."""
+    n, k = f.shape
     for i in range(n):
         for j in range(k):
             if free[i, j]:
-                s = 0.0
-                for p in range(P):
-                    s += F[p, i, j]
-                v[i, j] += hdt * s * minv[i, j]
+                v[i, j] += hdt * f[i, j] * minv[i, j]
             else:
                 v[i, j] = 0.0
 
 
 @njit(cache=True)
-def close_step(F, F_new, du, W, v, minv, free, hdt, m):
-    """The end of a step: every family's work ``W[p] += 1/2 (F_p + F_new_p) . du``, the
-    closing half kick ``v += hdt M^-1 sum_p F_new_p``, ``F <- F_new``; returns the
-    kinetic energy ``1/2 v . M v``.  One pass over the nodes (the integrator's own cost
-    per step is then one kernel call)."""
+def close_step(F, F_new, du, W, v, minv, free, hdt, m, f):
+    """The end of a step: every family's work ``W[p] += 1/2 (F_p + F_new_p) . du``,
+    ``F <- F_new``, the total force ``f = sum_p F_new_p`` and the closing half kick
+    ``v += hdt M^-1 f``; returns the kinetic energy ``1/2 v . M v``.  Family by family
+    over contiguous rows with the work summed in a register (the families are the
+    integrator's largest arrays: this pass is memory bound)."""
     P, n, k = F.shape
+    Fp = F.reshape(P, n * k)
+    Fq = F_new.reshape(P, n * k)
+    d = du.reshape(n * k)
+    tot = f.reshape(n * k)
+    tot[:] = 0.0
+    for p in range(P):
+        w = 0.0
+        for q in range(n * k):
+            fn = Fq[p, q]
+            w += (Fp[p, q] + fn) * d[q]
+            Fp[p, q] = fn
+            tot[q] += fn
+        W[p] += 0.5 * w
+    half_kick(v, f, minv, free, hdt)
     ke = 0.0
     for i in range(n):
         for j in range(k):
-            s = 0.0
-            for p in range(P):
-                fn = F_new[p, i, j]
-                W[p] += 0.5 * (F[p, i, j] + fn) * du[i, j]
-                F[p, i, j] = fn
-                s += fn
-            if free[i, j]:
-                v[i, j] += hdt * s * minv[i, j]
-            else:
-                v[i, j] = 0.0
             ke += m[i, j] * v[i, j] * v[i, j]
     return 0.5 * ke
 
@@ -135,6 +137,7 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
     W = np.zeros(len(names))
     dt = settings.safety * system.stable_step()
     F = system.forces(0.0, v, dt).copy()
+    f = F.sum(axis=0)                   # total force on the nodes
     system.commit()
     w_ext = 0.0
     ke_ie = bal_max = 0.0
@@ -150,11 +153,11 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
         if step % settings.recheck_every == 0:
             dt = min(dt, settings.safety * system.stable_step())
         h = min(dt, total_time - t)
-        half_kick(v, F, minv, free, 0.5 * h)
+        half_kick(v, f, minv, free, 0.5 * h)
         np.multiply(v, h, out=du)
         t_new = t + h
         system.advance(du, t_new)
-        ke = close_step(F, system.forces(t_new, v, h), du, W, v, minv, free, 0.5 * h, m)
+        ke = close_step(F, system.forces(t_new, v, h), du, W, v, minv, free, 0.5 * h, m, f)
         w_ext += system.external_work(t, t_new)
         system.commit()
         t = t_new

@@ -66,13 +66,24 @@ def return_map(q_trial, c, eps_p_old, sigma_y, K, n):
     """
     a = eps_p_old
     sa = _pow(a, n) if (a > 0.0 and K != 0.0) else 0.0   # a**n
+    dg, H, _ = return_map_from(q_trial, c, a, sa, sigma_y, K, n)
+    return dg, H
+
+
+@njit(cache=True)
+def return_map_from(q_trial, c, eps_p_old, sa, sigma_y, K, n):
+    """:func:`return_map` from a stored ``sa = eps_p_old**n`` (a history variable: the
+    flow stress ``sigma_Y + K sa`` then needs no power); returns ``(dg, H, sa_new)``,
+    ``sa_new = (eps_p_old + dg)**n`` (``sa`` itself when elastic)."""
+    a = eps_p_old
     f0 = q_trial - sigma_y - K * sa
     if f0 <= 0.0:
-        return 0.0, 0.0
+        return 0.0, 0.0, sa
     if K == 0.0:
-        return f0 / c, 0.0
+        return f0 / c, 0.0, 0.0
     if n == 1.0:
-        return f0 / (c + K), K
+        dg = f0 / (c + K)
+        return dg, K, a + dg
     A = f0 + K * sa + c * a
     tol = RETURN_TOL * (q_trial if q_trial > 1.0 else 1.0)
     if n < 1.0:
@@ -88,8 +99,8 @@ def return_map(q_trial, c, eps_p_old, sigma_y, K, n):
             s = min(max(s + h / (K + (c * m * e / s if s > 0.0 else 0.0)), sa), hi)
         dg = e - a if e > a else 0.0
         if e <= EPS_P_FLOOR:
-            return dg, hardening_slope(e, K, n)
-        return dg, K * n * s / e        # K n e**(n-1) with s = e**n
+            return dg, hardening_slope(e, K, n), s
+        return dg, K * n * s / e, s     # K n e**(n-1) with s = e**n
     e = a                               # n > 1: unknown e, h(e) = A - c e - K e**n
     hi = a + f0 / c                     # h(hi) <= 0
     se = sa
@@ -100,7 +111,7 @@ def return_map(q_trial, c, eps_p_old, sigma_y, K, n):
         dh = c + (K * n * se / e if e > 0.0 else 0.0)
         e = min(max(e + h / dh, a), hi)
         se = _pow(e, n)
-    return e - a, hardening_slope(e, K, n)
+    return e - a, hardening_slope(e, K, n), se
 
 
 @njit(cache=True)
