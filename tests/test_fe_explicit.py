@@ -80,3 +80,16 @@ def test_absurd_step_stops_with_clear_error():
     assert "explicit run stopped" in msg and "step" in msg and "KE" in msg and "IE" in msg
     assert exc.value.step < 1000
     print(msg)
+
+
+def test_smooth_step_time_inverts_the_amplitude():
+    from harnesspipe.fe.explicit import smooth_step, smooth_step_time
+    from harnesspipe.models.hifi import end_time
+    for r in (0.0, 0.1, 2.0 / 3.0, 0.999, 1.0):
+        assert smooth_step(smooth_step_time(r))[0] == pytest.approx(r, abs=1e-12)
+    assert end_time(1.0, 21.0, 30.0) == pytest.approx(smooth_step_time(0.7))
+    assert 0.55 < end_time(1.0, 20.0, 30.0) < 0.65       # 2/3 of the stroke at ~60 % of the time
+    assert end_time(2.0, 0.0, 30.0) == end_time(2.0, 30.0, 30.0) == 2.0
+    with pytest.raises(ValueError, match="outside"):
+        smooth_step_time(1.5)
+

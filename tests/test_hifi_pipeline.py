@@ -66,6 +66,8 @@ def run(cfg, case, interface, overrides=None):
     summary = {"wall_s": 0.01, "steps": 100, "dt": 1e-5, "f_m": 25.0, "ke_ie_max": 0.01,
                "energy_error": 1e-4, "n_beam_elements": 10, "n_shell_elements": 0, "contact_pairs_max": 0,
                "pid": os.getpid()}
+    if overrides and "fake_tie_separation" in overrides:
+        summary["tie_separation_max_mm"] = float(overrides["fake_tie_separation"])
     return FakeRun(pd.DataFrame({"deflection_mm": u, "force_N": F}), hist, summary=summary)
 
 
@@ -260,6 +262,31 @@ def test_cohesive_simplex_step_on_two_cases(tmp_path, fake):
     assert sorted(pd.read_csv(tmp_path / "cohesive" / "curve.csv")["case"].unique()) == sorted(refs)
 
 
+@pytest.mark.parametrize("separation, inert", [(0.01, True), (0.03, False)])
+def test_cohesive_fit_stops_when_no_tie_reaches_damage_onset(tmp_path, fake, separation, inert):
+    """Ties far below delta0 (0.05) in the first evaluation: one evaluation, start values kept,
+    the reason stated; near onset (0.03 > delta0 / 2) the simplex runs on."""
+    u = np.linspace(0.0, 30.0, 101)
+    refs = {c: write_prepared(tmp_path / f"{c}.h5", c, fake.force(u, fake.TRUTH, "closed_tube"), u)
+            for c in ("cwb19_t2_closed", "cwb19_t2_open_halflap")}
+    model = {"cases": {c: {"covering": "closed_tube"} for c in refs}, "hifi": {}}
+    start = {"mu_rtb": 0.3, "mu_rtp": 0.1, "delta0": 0.05, "delta_f": 0.1, "alpha_d": 1.0}
+    settings = {"names": ["delta0", "delta_f", "alpha_d"], "cases": list(refs), "window": [20.0, 30.0],
+                "method": "simplex", "bounds": None, "xatol": 1e-3, "fatol": 1e-4, "maxfev": 30,
+                "start": start, "models": {c: model for c in refs},
+                "set": {"fake_tie_separation": separation}}
+    calls = []
+    counting = lambda *a: calls.append(a) or runner_of(fake)(*a)  # noqa: E731
+    fit = hifi_chain.fit_step("cohesive", settings, refs, tmp_path / "cohesive", runner=counting)
+    assert len(calls) <= 2 * fit["nfev"]          # the probe is the search's first point, not rerun
+    if inert:
+        assert fit["nfev"] == 1 and not fit["converged"]
+        assert fit["parameters"] == {k: start[k] for k in settings["names"]}
+        assert "not identifiable" in fit["message"] and "0.01 mm" in fit["message"]
+    else:
+        assert fit["nfev"] > 4 and "not identifiable" not in fit["message"]
+
+
 def test_cohesive_cases_side_by_side_match_serial(tmp_path, fake):
     """workers=2: the two cases of each evaluation run in worker processes; same search,
     same result, and the rejected points are still logged."""
@@ -412,6 +439,9 @@ def test_hifi_targets_resolve_and_run(project):
     for step in ("mu_rtb", "mu_rtp", "cohesive", "fabric"):
         for name in ("fit.json", "curve.csv", "trace.h5", "rejected.jsonl", "fit.png"):
             assert (res / "chain" / step / name).exists()
+        # the friction fits (window < 20 mm) end their runs 1 mm past it; the others go to 30
+        stop = json.loads((res / "chain" / step / "fit.json").read_text())["set"].get("stop_deflection")
+        assert stop == (21.0 if step.startswith("mu_") else None), step
     virtual = sorted(p.name for p in (res / "virtual").iterdir())
     assert "twb19_t2" in virtual and "cwb10t1_9t2_fabric" in virtual and len(virtual) == 9
     s = json.loads((res / "virtual" / "cwb19_t1_open_coarse" / "summary.json").read_text())

@@ -5,7 +5,7 @@
 #       (mu_rtb -> mu_rtp -> cohesive -> E2/E1) -> results/hifi/interface.csv, then the virtual
 #       test of every case (incl. hifi.extra_cases) at the fitted interface.
 # Hours at the default profile on 2 cores: part of `all` only with hifi.pipeline.in_all.
-# Every run is one thread, so two run side by side.
+# Every virtual test is one thread, so two run side by side; a fit step takes both cores.
 
 HIFI = config["hifi"]["pipeline"]
 HIFI_CASES = {**config["cases"], **config["hifi"]["extra_cases"]}
@@ -88,8 +88,18 @@ def hifi_fit_settings(step):
         "xatol": HIFI["bounded_xatol"] if bounded else HIFI["simplex"]["xatol"],
         "fatol": None if bounded else HIFI["simplex"]["fatol"],
         "maxfev": HIFI_BUDGET["bounded_maxfev" if bounded else "simplex_maxfev"],
-        "start": start, "models": {c: hifi_model(c) for c in s["cases"]}, "set": HIFI["set"],
+        "start": start, "models": {c: hifi_model(c) for c in s["cases"]},
+        "set": {**hifi_fit_stop(HIFI[s["window"]]), **HIFI["set"]},
     }, sort_keys=True)
+
+
+def hifi_fit_stop(window):
+    """--set that ends a fit's runs just past its window (friction: < 20 mm of 30), if any."""
+    after = HIFI["stop_after_window"]
+    end = window[1] + (after or 0.0)
+    if after is None or end >= config["three_point"]["deflection"]:
+        return {}
+    return {"stop_deflection": end}
 
 
 def hifi_rom_settings(case):
@@ -211,11 +221,15 @@ rule hifi_fit:
         settings=lambda wc: hifi_fit_settings(wc.step),
         refs=lambda wc: " ".join(f"{c}={hifi_prepared(c)}" for c in HIFI_STEPS[wc.step]["cases"]),
         code=HIFI_FIT_CODE,
+        n_cases=lambda wc: len(HIFI_STEPS[wc.step]["cases"]),
     wildcard_constraints:
         step="|".join(HIFI_STEPS),
-    threads: lambda wc: len(HIFI_STEPS[wc.step]["cases"])   # one process of one thread per case
+    # the fits run one after the other: each takes both cores, as one process per case (one
+    # Numba thread each) or, for a one-case step, one process with two Numba threads
+    threads: 2
     shell:
-        "NUMBA_NUM_THREADS=1 {HP} stage hifi-fit --step {wildcards.step} --workers {threads} "
+        "W=$(( {params.n_cases} < {threads} ? {params.n_cases} : {threads} )); "
+        "NUMBA_NUM_THREADS=$(( {threads} / W )) {HP} stage hifi-fit --step {wildcards.step} --workers $W "
         "--settings '{params.settings}' --reference {params.refs} --coverings {input.table2} "
         "--prior {input.priors} --outdir {RES}/hifi/chain/{wildcards.step} > {log} 2>&1"
 

@@ -18,14 +18,13 @@ replays the logged evaluations instead of recomputing them.
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 
 import numpy as np
 from scipy.optimize import minimize_scalar
 
 from harnesspipe.calibrate.objective import l2_error, on_grid
-from harnesspipe.calibrate.simplex import EvaluationLog, FitResult, nelder_mead
+from harnesspipe.calibrate.simplex import EvaluationLog, FitResult, logged_call, nelder_mead
 
 REJECT_FACTOR = 10.0
 #: a simulated curve may end this fraction of the window's end short of it (the feeder stops
@@ -173,15 +172,7 @@ def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, ke
     log = EvaluationLog(log_path, [name], key)
 
     def wrapped(c):
-        x = np.array([c], dtype=float)
-        hit = log.lookup(x)
-        if hit is not None:
-            log.append(x, hit[1], hit[2])
-            return hit[1]
-        t0 = time.perf_counter()
-        err = float(objective(x))
-        log.append(x, err, time.perf_counter() - t0)
-        return err
+        return logged_call(log, objective, np.array([c], dtype=float))
 
     res = minimize_scalar(wrapped, bounds=tuple(bounds), method="bounded",
                           options={"xatol": xatol, "maxiter": maxfev})

@@ -105,6 +105,28 @@ class EvaluationLog:
         return pd.DataFrame(data)
 
 
+def logged_call(log: EvaluationLog, objective, x: np.ndarray) -> float:
+    """objective(x), replayed from the log when it holds the same point next, and logged."""
+    hit = log.lookup(x)
+    if hit is not None:
+        log.append(x, hit[1], hit[2])
+        return hit[1]
+    t0 = time.perf_counter()
+    err = float(objective(x))
+    log.append(x, err, time.perf_counter() - t0)
+    return err
+
+
+def evaluate_logged(objective, x0, names, *, log_path=None, key="") -> FitResult:
+    """One evaluation at ``x0``, logged (or replayed) as the first row of the log: a
+    :func:`nelder_mead` from ``x0`` on the same log then replays it instead of running it."""
+    x0 = np.asarray(x0, dtype=float)
+    log = EvaluationLog(log_path, names, key)
+    err = logged_call(log, objective, x0)
+    return FitResult(names=list(names), x=x0, fun=err, nfev=1, converged=False,
+                     message="one evaluation", trace=log.frame())
+
+
 def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
                 log_path=None, key="", restarts=0, start_scaling=None,
                 step=SIMPLEX_STEP) -> FitResult:
@@ -129,14 +151,7 @@ def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
     log = EvaluationLog(log_path, names, key)
 
     def wrapped(z):
-        x = z * scale
-        hit = log.lookup(x)
-        if hit is not None:
-            log.append(x, hit[1], hit[2])
-            return hit[1]
-        t0 = time.perf_counter()
-        err = float(objective(x))
-        log.append(x, err, time.perf_counter() - t0)
+        err = logged_call(log, objective, z * scale)
         return err if np.isfinite(err) else np.inf
 
     z, best, converged, message = x0 / scale, np.inf, False, ""

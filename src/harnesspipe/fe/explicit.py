@@ -96,6 +96,20 @@ def smooth_step(x: float):
             60.0 * x * (1.0 - x) * (1.0 - 2.0 * x))
 
 
+def smooth_step_time(r: float) -> float:
+    """The x in [0, 1] at which the smooth step reaches ``S(x) = r`` (bisection: S increases)."""
+    if not 0.0 <= r <= 1.0:
+        raise ValueError(f"smooth step level {r} outside [0, 1]")
+    lo, hi = 0.0, 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if smooth_step(mid)[0] < r:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
 def dilatational_speed(E: float, nu: float, rho: float) -> float:
     """``c_d`` of eq. 11."""
     return float(np.sqrt(E * (1.0 - nu) / (rho * (1.0 + nu) * (1.0 - 2.0 * nu))))

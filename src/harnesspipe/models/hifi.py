@@ -642,6 +642,16 @@ def quasi_static_ratio(history, stroke: float, start: float = KE_IE_FROM) -> flo
     return float(np.max(ke[ok] / ie[ok])) if ok.any() else float("inf")
 
 
+def end_time(T: float, stop_deflection: float, stroke: float) -> float:
+    """Time at which the feeder (smooth step over the loading time ``T`` to ``stroke``)
+    reaches ``stop_deflection``; ``T`` when that is 0 or not below the stroke.  A fit on a
+    deflection window that ends early needs no more of the test (friction: < 20 mm)."""
+    from harnesspipe.fe.explicit import smooth_step_time
+    if stop_deflection <= 0.0 or stop_deflection >= stroke:
+        return T
+    return T * smooth_step_time(stop_deflection / stroke)
+
+
 def _reject(res, system, ke_ie: float, explicit: dict) -> None:
     """Raise ExplicitError for a finished run that is not a valid quasi-static test: KE/IE
     above ``ke_ie_fail`` or an energy balance error (largest over the run, relative to the
@@ -674,12 +684,14 @@ def three_point(inp: HifiInputs, n_shapes: int = 4, settings: DynamicsSettings |
     marks = np.linspace(0.0, 1.0, n_shapes + 1)
     state = {"next": 0}
 
+    t_end = end_time(system.T, ex.get("stop_deflection", 0.0), inp.config["three_point"]["deflection"])
+
     def on_output(step, t):
-        while state["next"] < marks.size and t >= marks[state["next"]] * system.T - 1e-12:
+        while state["next"] < marks.size and t >= marks[state["next"]] * t_end - 1e-12:
             shapes[round(float(system.pins.feeder_displacement()), 6)] = system.x.copy()
             state["next"] += 1
 
-    res = integrate(system, system.T, settings, on_output=on_output)
+    res = integrate(system, t_end, settings, on_output=on_output)
     hist = res.history
     ke_ie = quasi_static_ratio(hist, inp.config["three_point"]["deflection"],
                                float(inp.explicit.get("ke_ie_from", KE_IE_FROM)))
@@ -688,6 +700,7 @@ def three_point(inp: HifiInputs, n_shapes: int = 4, settings: DynamicsSettings |
     summary = {
         "wall_s": time.perf_counter() - t0, "solver_wall_s": res.wall_s, "steps": res.n_steps,
         "dt": res.dt, "f_m": ex["f_m"], "t_total": system.T, "time_scale": system.time_scale,
+        "stop_deflection": float(ex.get("stop_deflection", 0.0)),
         "ke_ie_max": ke_ie, "ke_ie_max_after_ramp": res.ke_ie_max,
         "quasi_static": bool(ke_ie <= inp.config["explicit"]["ke_ie_max"]),
         "energy_error": res.energy_error,

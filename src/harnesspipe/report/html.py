@@ -247,6 +247,8 @@ def hifi_section(results: Path, cfg: dict, prepared: list[Path]) -> str:
     for p in fits:
         fit = read_fit(p)
         status = "" if fit.get("converged") else ' <span class="bad">(search did not converge)</span>'
+        if "not identifiable" in fit.get("message", ""):
+            status = f' <span class="bad">{html.escape(fit["message"])}.</span>'
         text = (f"<h3>Calibration step {html.escape(fit['item'])}</h3><p>{html.escape(fit.get('method', ''))} "
                 f"on {html.escape(', '.join(fit.get('cases', [])))}, deflection window "
                 f"{fit.get('window')} mm: ||e||<sub>l2</sub> = {fit['error_l2']:.4g} N (relative "

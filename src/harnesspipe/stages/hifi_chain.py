@@ -38,6 +38,7 @@ import pandas as pd
 
 from harnesspipe.calibrate import hifi as hcal
 from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
+from harnesspipe.calibrate.simplex import evaluate_logged
 from harnesspipe.config import ConfigError
 from harnesspipe.stages.common import read_fit, write_csv, write_fit, write_json
 
@@ -178,7 +179,9 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
         objective = hcal.HifiObjective(simulate, targets, fixed, names, rejected_log=rejected_live, key=key,
                                        pool=pool, on_run=lambda c, p, run: runs.update({(c, _pkey(p)): run}))
         t0 = time.perf_counter()
-        res = _search(step, settings, objective, names, fixed, live, key)
+        res = _inert_cohesion(step, settings, objective, names, fixed, live, key, runs, cases)
+        if res is None:
+            res = _search(step, settings, objective, names, fixed, live, key)
     best = objective.params(res.x)
     rejected_keys = {_pkey(r["parameters"]) for r in hcal.read_rejected(rejected_live, key)}
     if not np.isfinite(res.fun) or _pkey(best) in rejected_keys:
@@ -264,6 +267,33 @@ def _search(step, settings, objective, names, fixed, live, key):
         return hcal.simplex_fit(objective, {k: fixed[k] for k in names}, xatol=settings["xatol"],
                                 fatol=settings["fatol"], maxfev=settings["maxfev"], log_path=log, key=key)
     raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex")
+
+
+ONSET_FRACTION = 0.5   # ties below this fraction of delta0 at the start: cohesion is inert
+
+
+def _inert_cohesion(step, settings, objective, names, fixed, live, key, runs, cases):
+    """The cohesive fit's first evaluation alone (logged like any other), and its result if
+    no cohesive tie of any case's run came near damage onset -- largest separation below
+    ``ONSET_FRACTION`` x delta0 (run summary ``tie_separation_max_mm``).  Below onset the
+    cohesive law is its linear elastic part (eqs. 7-8) whatever delta0, delta_f and alpha:
+    the curve does not depend on them, and the simplex (first moves +-5 %) could only reach
+    damage by halving delta0.  The parameters then stay at their start values, the fit says
+    why, and the rest of the search is not run.  None: cohesion acts, search on."""
+    if settings["method"] != "simplex" or "delta0" not in names:
+        return None
+    res = evaluate_logged(objective, [fixed[k] for k in names], names,
+                          log_path=live / "evaluations.h5", key=key)
+    seps = [getattr(runs.get((c, _pkey(objective.params(res.x)))), "summary", {}).get(
+        "tie_separation_max_mm") for c in cases]
+    if any(s is None for s in seps) or max(seps) >= ONSET_FRACTION * fixed["delta0"]:
+        return None
+    res.message = (f"not identifiable: no cohesive tie reaches damage onset (largest separation "
+                   f"{max(seps):.3g} mm < {ONSET_FRACTION:g} delta0 = "
+                   f"{ONSET_FRACTION * fixed['delta0']:.3g} mm in every case); the tape stays "
+                   f"bonded, so delta0, delta_f and alpha keep their start values")
+    res.converged = False
+    return res
 
 
 def _pkey(params: dict) -> tuple:
