@@ -72,10 +72,10 @@ def _section_force(e0, kappa_y, kappa_z, y, z, area, eps_p_c, alpha_c, sa_c, eps
         eps_p_t[e, g, f] = ep
         alpha_t[e, g, f] = al
         sa_t[e, g, f] = sa
-        sa = sig * area[f]
-        s0 += sa
-        s1 += sa * zf
-        s2 -= sa * yf
+        fa = sig * area[f]                      # the fibre's axial force
+        s0 += fa
+        s1 += fa * zf
+        s2 -= fa * yf
     return s0, s1, s2
 
 
