@@ -134,7 +134,7 @@ class HifiSystem:
         self.seg_r = mesh.wire_radius[mesh.beam_wire].astype(float)
         self.seg_body = mesh.beam_wire.astype(np.int64)
         self._setup_ties()
-        self.shell_mass_scale = self._scale_light_shells()
+        self.shell_mass_scale = self._scale_to_wire_step()
         self.dt0 = 2.0 / np.sqrt(self.node_omega2().max())
         self._setup_contacts()
         self._unbounded = np.full(3, np.inf)         # pins are infinitely long cylinders
@@ -147,7 +147,7 @@ class HifiSystem:
         self.c_prev = self.pins.centres.copy()
 
     # -- set-up -----------------------------------------------------------------
-    def _scale_light_shells(self) -> dict:
+    def _scale_to_wire_step(self) -> dict:
         """Selective mass scaling (on top of the uniform f_m) to the wires' element step.
 
         The 0.1 mm PVC tape on its 30 N/mm^3 cohesive bond and the thin tube and fabric
