@@ -321,6 +321,35 @@ def test_run_case_writes_artefacts_and_error(tmp_path, fake):
     assert (tmp_path / "v" / "energies.csv").exists()
 
 
+def test_virtual_test_reuses_the_fits_run_only_when_it_is_the_same_run(tmp_path, fake):
+    """A virtual test at the interface a fit just ran on its whole stroke takes that run
+    (same run_key: model, interface, --set, coverings); any difference runs it anew."""
+    u = np.linspace(0.0, 30.0, 101)
+    ref = write_prepared(tmp_path / "r.h5", "cwb19_t2_fabric", fake.force(u, fake.TRUTH, "fabric_tube"), u)
+    model = {"cases": {"cwb19_t2_fabric": {"covering": "fabric_tube"}}, "hifi": {}}
+    settings = {"names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": [0.0, 30.0],
+                "method": "bounded", "bounds": [0.2, 1.2], "xatol": 1e-2, "fatol": None, "maxfev": 12,
+                "start": {k: v for k, v in fake.TRUTH.items() if k != "E2_over_E1"},
+                "models": {"cwb19_t2_fabric": model}, "set": {}}
+    fit_dir = tmp_path / "fabric"
+    hifi_chain.fit_step("fabric", settings, {"cwb19_t2_fabric": ref}, fit_dir, runner=runner_of(fake))
+    calls = []
+    counting = lambda *a: calls.append(a) or runner_of(fake)(*a)  # noqa: E731
+    virtual = {"model": model, "interface": {}, "set": {}}
+    s = hifi_chain.run_case("cwb19_t2_fabric", virtual, tmp_path / "v", interface_fit=fit_dir / "fit.json",
+                            reference=ref, runner=counting, reuse=fit_dir / "cwb19_t2_fabric")
+    assert calls == [] and s["reused_from"] == str(fit_dir / "cwb19_t2_fabric")
+    best = pd.read_csv(fit_dir / "cwb19_t2_fabric" / "curve.csv")
+    pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "v" / "curve.csv"), best)
+    assert s["measured"]["error_rel"] < 0.05 and (tmp_path / "v" / "energies.csv").exists()
+    for changed in ({**virtual, "set": {"t_total": 0.5}}, {**virtual, "interface": {"mu_rtb": 0.2}}):
+        s = hifi_chain.run_case("cwb19_t2_fabric", {**changed}, tmp_path / "w", runner=counting,
+                                interface_fit=None if changed["interface"] else fit_dir / "fit.json",
+                                reuse=fit_dir / "cwb19_t2_fabric")
+        assert "reused_from" not in s
+    assert len(calls) == 2
+
+
 def test_hifi_report_section(tmp_path, fake):
     from harnesspipe import config as cfgmod
     from harnesspipe.report.html import hifi_section
@@ -516,3 +545,13 @@ def test_branch_properties_from_hifi_virtual_tests(project):
 def test_hifi_rules_stay_out_of_all(project):
     jobs = planned(snakemake(project, "-n", "--rerun-triggers", "mtime", "params", "input", "code"))
     assert not any(rule.startswith("hifi") for rule in jobs)
+
+
+def test_virtual_tests_of_the_calibration_cases_reuse_the_fits_runs(project):
+    virtual = project / "results" / "hifi" / "virtual"
+    for case, step in (("cwb19_t2_closed", "cohesive"), ("cwb19_t2_open_halflap", "cohesive"),
+                       ("cwb19_t2_fabric", "fabric")):
+        s = json.loads((virtual / case / "summary.json").read_text())
+        assert s["reused_from"] == f"results/hifi/chain/{step}/{case}", case
+    for case in ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric", "twb19_t2"):
+        assert "reused_from" not in json.loads((virtual / case / "summary.json").read_text()), case

@@ -85,6 +85,8 @@ def register(sub) -> None:
                    help="fit.json of a chain step whose interface replaces the settings' values")
     p.add_argument("--reference", type=Path, default=None, help="prepared test (HDF5) to compare with")
     p.add_argument("--role", default="virtual", help="crosscheck | validation | virtual (report)")
+    p.add_argument("--reuse", type=Path, default=None,
+                   help="folder of an earlier run (a fit's best point) taken when it is the same run")
     p.set_defaults(func=_hifi_run)
 
     p = ssub.add_parser("hifi-fit", help="one step of the hi-fi interface calibration (Sec. 4.2)")
@@ -181,9 +183,10 @@ def _table3(args) -> int:
 def _hifi_run(args) -> int:
     from harnesspipe.stages.hifi_chain import run_case
     summary = run_case(args.case, args.settings, args.outdir, table2=args.coverings,
-                       interface_fit=args.interface, reference=args.reference, role=args.role)
+                       interface_fit=args.interface, reference=args.reference, role=args.role,
+                       reuse=args.reuse)
     print(json.dumps({k: summary.get(k) for k in ("case", "role", "wall_s", "steps", "dt", "ke_ie_max",
-                                                   "energy_error", "measured")}, indent=2))
+                                                   "energy_error", "measured", "reused_from")}, indent=2))
     return 0
 
 

@@ -297,7 +297,9 @@ def hifi_section(results: Path, cfg: dict, prepared: list[Path]) -> str:
         if summary.get("role"):
             block = block.replace("</h4>", f" <span class='note'>({html.escape(summary['role'])})</span></h4>", 1)
         blocks[group].append(block)
-        if group != "chain":
+        if group != "chain" and summary.get("reused_from"):      # the fit's run, counted there
+            cost_rows.append([f"{title} (the fit's best-point run)", 0, 0.0, 0.0])
+        elif group != "chain":
             n_runs += 1
             wall_total += float(summary.get("wall_s", 0.0))
             cost_rows.append([title, 1, float(summary.get("wall_s", 0.0)), float(summary.get("wall_s", 0.0)) / 60.0])

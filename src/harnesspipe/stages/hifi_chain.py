@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import hashlib
 import json
 import multiprocessing
 import shutil
@@ -65,6 +66,14 @@ def default_runner(cfg: dict, case: str, overrides: dict, table2: Path | None):
     return three_point(inputs(cfg, case, {k: str(v) for k, v in overrides.items()}, table2))
 
 
+def run_key(model: dict, interface: dict, overrides: dict, table2: Path | None) -> str:
+    """Identity of a hi-fi run: everything its result depends on besides the code -- the
+    model config, the interface, the ``--set`` overrides and the covering table."""
+    text = json.dumps({"model": model, "interface": {**NEUTRAL, **interface}, "set": overrides,
+                       "coverings": Path(table2).read_text() if table2 else "paper"}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
 def _run(settings, case, interface, table2, runner):
     cfg = model_config(settings, interface)
     return (runner or default_runner)(cfg, case, dict(settings.get("set", {})), table2)
@@ -99,23 +108,58 @@ def curve_vs_measured(curve: pd.DataFrame, prepared) -> dict:
 
 def run_case(case: str, settings: dict, outdir: Path, *, table2: Path | None = None,
              interface_fit: Path | None = None, reference: Path | None = None,
-             role: str = "virtual", runner=None) -> dict:
+             role: str = "virtual", runner=None, reuse: Path | None = None) -> dict:
     """One virtual test at ``settings["interface"]`` updated by the ``interface`` of a chain
-    fit (``interface_fit``); writes the run's artefacts to ``outdir``; returns the summary."""
+    fit (``interface_fit``); writes the run's artefacts to ``outdir``; returns the summary.
+    ``reuse``: a folder of an earlier run (a fit's best point, ``<fit>/<case>/``); when its
+    ``run_key`` is this run's, its artefacts are taken instead of running again."""
     interface = dict(settings.get("interface", {}))
     source = "settings"
     if interface_fit is not None:
         interface.update(read_fit(interface_fit)["interface"])
         source = str(interface_fit)
-    run = _run(settings, case, interface, table2, runner)
+    overrides = settings.get("set", {})
+    key = run_key(settings["model"], interface, overrides, table2)
     summary = {"case": case, "role": role, "interface_source": source,
-               "coverings_source": str(table2) if table2 else "paper (config paper.table2)",
-               **run.summary, "interface": {**NEUTRAL, **interface}, "set": settings.get("set", {})}
+               "coverings_source": str(table2) if table2 else "paper (config paper.table2)"}
+    earlier = _reusable(reuse, key)
+    if earlier is not None:
+        curve = pd.read_csv(Path(reuse) / "curve.csv")
+        summary.update({**earlier, **summary, "reused_from": str(reuse)})
+    else:
+        run = _run(settings, case, interface, table2, runner)
+        curve = run.curve
+        summary.update(run.summary)
+    summary.update({"interface": {**NEUTRAL, **interface}, "set": overrides, "run_key": key})
     if reference is not None:
         from harnesspipe.stages.data import read_prepared
-        summary["measured"] = curve_vs_measured(run.curve, read_prepared(reference))
-    write_run(run, outdir, summary)
+        summary["measured"] = curve_vs_measured(curve, read_prepared(reference))
+    if earlier is not None:
+        _copy_run(Path(reuse), Path(outdir), summary)
+    else:
+        write_run(run, outdir, summary)
     return summary
+
+
+def _reusable(folder: Path | None, key: str) -> dict | None:
+    """The summary of the run in ``folder`` if it is the run ``key`` and complete, else None."""
+    if folder is None or not (Path(folder) / "summary.json").exists():
+        return None
+    earlier = json.loads((Path(folder) / "summary.json").read_text())
+    return earlier if earlier.get("run_key") == key and (Path(folder) / "curve.csv").exists() else None
+
+
+def _copy_run(src: Path, dst: Path, summary: dict) -> None:
+    """The artefacts of the run in ``src`` into ``dst`` with a new summary (written last)."""
+    dst.mkdir(parents=True, exist_ok=True)
+    for item in sorted(src.iterdir()):
+        if item.name == "summary.json":
+            continue
+        if item.is_dir():
+            shutil.copytree(item, dst / item.name, dirs_exist_ok=True)
+        else:
+            shutil.copyfile(item, dst / item.name)
+    write_json(dst / "summary.json", summary)
 
 
 # --------------------------------------------------------------------------- calibration chain
@@ -199,7 +243,9 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
         per_case[case] = {"test_id": refs[case].test_id, "error_l2_window": err,
                           "measured": curve_vs_measured(run.curve, refs[case])}
         write_run(run, outdir / case, {"case": case, "role": f"calibration ({step})", **run.summary,
-                                       "interface": {**NEUTRAL, **best}, "set": settings.get("set", {})})
+                                       "interface": {**NEUTRAL, **best}, "set": settings.get("set", {}),
+                                       "run_key": run_key(settings["models"][case], best,
+                                                          settings.get("set", {}), table2)})
         c = run.curve.rename(columns={"deflection_mm": "displacement_mm"})[["displacement_mm", "force_N"]]
         curves.append(c.assign(case=case)[["case", "displacement_mm", "force_N"]])
     curve = pd.concat(curves, ignore_index=True)
