@@ -84,7 +84,10 @@ def data_section(summary: str, prepared_paths: list[Path], truth: dict) -> str:
             + '<div class="fit">' + "".join(figs) + "</div>")
 
 
-def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dict | None) -> str:
+def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dict | None,
+              reference: pd.DataFrame | None = None) -> str:
+    """One fit: values beside truth and paper, the curve against the measured band (``prepared``,
+    may be None) and, for a ROM fitted to a hi-fi virtual test, that ``reference`` curve."""
     curve = pd.read_csv(fit_dir / "curve.csv")
     names = list(fit["parameters"])
     label = "fitted" if fit.get("role", "calibration") == "calibration" else f"used ({fit['role']}, no refit)"
@@ -99,8 +102,9 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
             f"||e||<sub>l2</sub> = {fit['error_l2']:.4g} N (relative {100 * fit['error_rel']:.2f} %), "
             f"{fit['nfev']} evaluations, {fit['wall_s']:.1f} s.{status}</p>"
             + _table(["", *names], rows))
-    figs = [_img(plots.fit_figure(prepared, curve, title=fit["item"]), f"fit {fit['item']}")]
-    if (fit_dir / "shapes.csv").exists() and any("markers" in s for s in prepared.samples.values()):
+    figs = [_img(plots.fit_figure(prepared, curve, title=fit["item"], reference=reference), f"fit {fit['item']}")]
+    if ((fit_dir / "shapes.csv").exists() and prepared is not None
+            and any("markers" in s for s in prepared.samples.values())):
         shapes = pd.read_csv(fit_dir / "shapes.csv")
         shapes = shapes[shapes["displacement_mm"] > 0]
         figs.append(_img(plots.shape_figure(prepared, shapes, title=f"{fit['item']}: bent shapes"),
@@ -115,16 +119,32 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
 def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth: dict) -> str:
     heading, _, table_name = STAGES[stage]
     blocks, summary = [], []
+    measured = {}              # three-point tests by case: the band beside a hi-fi reference
+    for p in sorted((results / "data").glob("*.h5")):
+        pr = read_prepared(p)
+        if pr.entry.get("kind") == "three_point":
+            measured[pr.entry["item"]] = pr
     for path in sorted(fits):
         fit = read_fit(path)
-        prepared = read_prepared(results / "data" / f"{fit['test_id']}.h5")
+        prepared, reference = _reference_of(fit, results, measured)
         paper = paper_values(cfg, stage, fit["item"])
-        tr = truth.get(fit["test_id"], {}).get("parameters")
-        blocks.append(fit_block(fit, path.parent, prepared, paper, tr))
+        tr = truth.get(prepared.test_id if prepared is not None else fit["test_id"], {}).get("parameters")
+        blocks.append(fit_block(fit, path.parent, prepared, paper, tr, reference))
         for k, v in fit["parameters"].items():
             summary.append([fit["item"], k, v, tr.get(k, "") if tr else "", paper.get(k, "") if paper else ""])
     table = _table(["item", "parameter", "recovered", "truth", f"paper ({table_name})"], summary)
     return f"<h2>{html.escape(heading)}</h2>{table}{''.join(blocks)}"
+
+
+def _reference_of(fit: dict, results: Path, measured: dict):
+    """(measured test or None, hi-fi curve or None) a fit is shown against: its prepared test,
+    or for a ROM fitted to a hi-fi virtual test (test id ``hifi:<case>``, rom.reference: hifi)
+    that curve and the case's measured test, if any."""
+    if not fit["test_id"].startswith("hifi:"):
+        return read_prepared(results / "data" / f"{fit['test_id']}.h5"), None
+    case = fit["test_id"].split(":", 1)[1]
+    curve = pd.read_csv(results / "hifi" / "virtual" / case / "curve.csv")
+    return measured.get(case), curve.rename(columns={"deflection_mm": "displacement_mm"})
 
 
 # --------------------------------------------------------------------------- hi-fi section

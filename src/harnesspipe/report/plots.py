@@ -10,13 +10,20 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
-def fit_figure(prepared, curve=None, title="", xlabel="displacement [mm]", label="simulated"):
-    """Band (min/max of the replicates), their mean and a simulated curve."""
+def fit_figure(prepared, curve=None, title="", xlabel="displacement [mm]", label="simulated", reference=None):
+    """Band (min/max of the replicates), their mean and a simulated curve; ``reference``
+    (displacement_mm, force_N): the hi-fi curve a ROM was fitted to, when not the mean;
+    ``prepared`` None: no measured test to show."""
     fig, ax = plt.subplots(figsize=(5.2, 3.6), dpi=110)
-    ax.fill_between(prepared.grid, prepared.lo, prepared.hi, color="0.82", label="measured (min/max)")
-    for name, s in sorted(prepared.samples.items()):
-        ax.plot(s["displacement_mm"], s["force_N"], color="0.6", lw=0.6)
-    ax.plot(prepared.grid, prepared.mean, color="k", lw=1.6, label="measured mean")
+    if prepared is not None:
+        ax.fill_between(prepared.grid, prepared.lo, prepared.hi, color="0.82", label="measured (min/max)")
+        for name, s in sorted(prepared.samples.items()):
+            ax.plot(s["displacement_mm"], s["force_N"], color="0.6", lw=0.6)
+        ax.plot(prepared.grid, prepared.mean, color="k", lw=1.6 if reference is None else 0.8,
+                label="measured mean")
+    if reference is not None:
+        ax.plot(reference["displacement_mm"], reference["force_N"], color="tab:blue", lw=1.6,
+                label="hi-fi virtual test (reference)")
     if curve is not None:
         ax.plot(curve["displacement_mm"], curve["force_N"], color="tab:red", lw=1.6, ls="--", label=label)
     ax.set_xlabel(xlabel)
