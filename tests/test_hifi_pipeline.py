@@ -542,9 +542,16 @@ def test_branch_properties_from_hifi_virtual_tests(project):
         with_fitted_properties({"properties": estimates}, {"twb99": fit})
 
 
-def test_hifi_rules_stay_out_of_all(project):
-    jobs = planned(snakemake(project, "-n", "--rerun-triggers", "mtime", "params", "input", "code"))
-    assert not any(rule.startswith("hifi") for rule in jobs)
+@pytest.mark.parametrize("in_all, reference, expected", [
+    ("[chain]", "hifi", {"hifi_fit": 4, "hifi_virtual": 9}),
+    ("[chain, crosscheck]", "hifi", {"hifi_fit": 4, "hifi_virtual": 9, "hifi_crosscheck": 5}),
+    ("[]", "measured", {}),
+])
+def test_all_holds_the_hifi_groups_of_in_all(project, in_all, reference, expected):
+    path = project / "in_all.yaml"
+    path.write_text(f"hifi:\n  pipeline:\n    in_all: {in_all}\nrom:\n  reference: {reference}\n")
+    jobs = planned(snakemake(project, "-n", "--forceall", "--configfile", str(path)))
+    assert {r: n for r, n in jobs.items() if r in ("hifi_fit", "hifi_virtual", "hifi_crosscheck")} == expected
 
 
 def test_virtual_tests_of_the_calibration_cases_reuse_the_fits_runs(project):

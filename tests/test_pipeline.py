@@ -1,4 +1,4 @@
-"""The pipeline end to end (quick profile) in a temporary copy of the project.
+"""The pipeline end to end (quick profile, the hi-fi chain included) in a temporary copy of the project.
 
 Also: reruns follow inputs and code exactly, and the report renders in Chromium.
 """
@@ -54,11 +54,17 @@ def test_outputs_of_every_stage(project):
     table3 = pd.read_csv(res / "rom" / "table3.csv")
     assert list(table3.columns) == ["case", "E", "sigma_y", "K", "n", "reference"]
     assert len(table3) == 6 and (table3[["E", "sigma_y", "K", "n"]] > 0).all().all()
+    assert set(table3["reference"]) == {"hifi"}           # Sec. 4.3: the ROM of the virtual tests
+    interface = pd.read_csv(res / "hifi" / "interface.csv")
+    assert list(interface["parameter"]) == ["mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1"]
+    assert sorted(p.name for p in (res / "hifi" / "virtual").iterdir()) == sorted(
+        ["cwb19_t2_closed", "cwb19_t2_open_halflap", "cwb19_t2_open_coarse", "cwb19_t1_open_coarse",
+         "cwb19_t2_fabric", "cwb10t1_9t2_fabric", "cwb38_t2_open_coarse", "twb19_t2", "twb38_t2"])
     damping = pd.read_csv(res / "branch" / "damping.csv")
     assert list(damping.columns) == ["parameter", "value"] and list(damping["parameter"]) == ["alpha"]
     html = (res / "report" / "index.html").read_text()
     for heading in ("Test data", "Component tensile fits", "Reduced-order beam properties",
-                    "Branching harness"):
+                    "Branching harness", "High-fidelity model"):
         assert heading in html
     assert (res / "rom" / "cwb19_t2_closed" / "shapes.pvd").exists()
     assert "http://" not in html and "https://" not in html  # nothing to fetch: opens offline
@@ -84,12 +90,14 @@ def test_code_change_reruns_only_its_users(project):
 
 
 def test_one_changed_csv_reruns_only_its_dependants(project):
-    csv = project / "data" / "experimental" / "three_point" / "bend_cwb19_t2_closed_s2.csv"
+    """A validation case's test: its virtual test (which reports the error against it) and the
+    ROM fitted to that virtual test rerun; no fit of the chain does."""
+    csv = project / "data" / "experimental" / "three_point" / "bend_cwb19_t1_open_coarse_s2.csv"
     lines = csv.read_text().splitlines()
     t, u, f = lines[50].split(",")
     lines[50] = f"{t},{u},{float(f) * 1.01:.6g}"
     csv.write_text("\n".join(lines) + "\n")
-    assert planned_jobs(project) == {"check_data": 1, "prepare_test": 1, "rom_fit": 1,
+    assert planned_jobs(project) == {"check_data": 1, "prepare_test": 1, "hifi_virtual": 1, "rom_fit": 1,
                                      "table3": 1, "report": 1, "all": 1}
 
 

@@ -56,6 +56,7 @@ rule hifi_warmup:
     """The same for the hi-fi model's kernels (only the hi-fi rules need them)."""
     input:
         rules.numba_warmup.output,
+    priority: 10      # the head of the hi-fi chain, the longest path of the run
     output:
         f"{RES}/logs/hifi_warmup_{source_hash('fe')}.done",
     log:

@@ -4,7 +4,8 @@
 #   hifi_chain_all: the Sec. 4.2 calibration chain against the measured means
 #       (mu_rtb -> mu_rtp -> cohesive -> E2/E1) -> results/hifi/interface.csv, then the virtual
 #       test of every case (incl. hifi.extra_cases) at the fitted interface.
-# Hours at the default profile on 2 cores: part of `all` only with hifi.pipeline.in_all.
+# `all` includes the groups named in hifi.pipeline.in_all (chain: about an hour at the default
+# profile on 2 cores; crosscheck: 5 more runs).
 # Every virtual test is one thread, so two run side by side; a fit step takes both cores.
 
 HIFI = config["hifi"]["pipeline"]
@@ -18,16 +19,21 @@ for _name in ("friction_window", "cohesive_window", "fabric_window", "mu_bounds"
     if not HIFI[_name][0] < HIFI[_name][1]:
         raise ValueError(f"config hifi.pipeline.{_name}: {HIFI[_name]} must increase")
 
-# The chain of Sec. 4.2 in order: each step fixes what the earlier steps fitted.
+# The chain of Sec. 4.2 in order: each step fixes what the earlier steps fitted.  cores: the
+# step's Snakemake threads.  Nothing else of the chain can run beside the friction and cohesive
+# fits (every virtual test needs their interface), so they take both cores (one process per
+# case, or one process with two Numba threads); the fabric fit takes one, and the virtual tests
+# of the other cases run beside it (one Numba thread per run is the efficient use of a core).
 HIFI_STEPS = {
     "mu_rtb": {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": "friction_window",
-               "method": "bounded", "bounds": "mu_bounds", "prior": []},
+               "method": "bounded", "bounds": "mu_bounds", "prior": [], "cores": 2},
     "mu_rtp": {"names": ["mu_rtp"], "cases": ["cwb19_t2_open_halflap"], "window": "friction_window",
-               "method": "bounded", "bounds": "mu_bounds", "prior": ["mu_rtb"]},
+               "method": "bounded", "bounds": "mu_bounds", "prior": ["mu_rtb"], "cores": 2},
     "cohesive": {"names": ["delta0", "delta_f", "alpha_d"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
-                 "window": "cohesive_window", "method": "simplex", "prior": ["mu_rtb", "mu_rtp"]},
+                 "window": "cohesive_window", "method": "simplex", "prior": ["mu_rtb", "mu_rtp"], "cores": 2},
     "fabric": {"names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": "fabric_window",
-               "method": "bounded", "bounds": "E2_bounds", "prior": ["mu_rtb", "mu_rtp", "cohesive"]},
+               "method": "bounded", "bounds": "E2_bounds", "prior": ["mu_rtb", "mu_rtp", "cohesive"],
+               "cores": 1},
 }
 HIFI_VALIDATION = ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric")   # Sec. 4.2: predicted, no refit
 HIFI_CALIBRATED = sorted({c for s in HIFI_STEPS.values() for c in s["cases"]})
@@ -118,8 +124,21 @@ def hifi_fit_inputs(wc):
             "warm": rules.hifi_warmup.output[0]}
 
 
+def hifi_interface_step(case):
+    """The chain step whose fit.json holds the interface a virtual test of ``case`` uses."""
+    return "fabric" if hifi_fabric(case) else "cohesive"
+
+
+def hifi_reuse(case):
+    """--reuse of a virtual test: the best-point run of the step that calibrated the case on its
+    whole stroke at this very interface (cohesive: both plastic-tube CWBs; fabric: the fabric
+    CWB) -- the stage takes it when its run_key matches, so the run is not made twice."""
+    step = hifi_interface_step(case)
+    return f"--reuse {RES}/hifi/chain/{step}/{case}" if case in HIFI_STEPS[step]["cases"] else ""
+
+
 def hifi_virtual_inputs(wc):
-    step = "fabric" if hifi_fabric(wc.case) else "cohesive"
+    step = hifi_interface_step(wc.case)
     inputs = {"table2": f"{RES}/tensile/table2.csv", "interface": f"{RES}/hifi/chain/{step}/fit.json",
               "warm": rules.hifi_warmup.output[0]}
     if wc.case in HIFI_MEASURED:
@@ -224,9 +243,8 @@ rule hifi_fit:
         n_cases=lambda wc: len(HIFI_STEPS[wc.step]["cases"]),
     wildcard_constraints:
         step="|".join(HIFI_STEPS),
-    # the fits run one after the other: each takes both cores, as one process per case (one
-    # Numba thread each) or, for a one-case step, one process with two Numba threads
-    threads: 2
+    threads: lambda wc: HIFI_STEPS[wc.step]["cores"]     # see HIFI_STEPS
+    priority: 10      # the chain is the longest path of the run: its steps go first
     shell:
         "W=$(( {params.n_cases} < {threads} ? {params.n_cases} : {threads} )); "
         "NUMBA_NUM_THREADS=$(( {threads} / W )) {HP} stage hifi-fit --step {wildcards.step} --workers $W "
@@ -262,6 +280,7 @@ rule hifi_virtual:
         settings=lambda wc: hifi_run_settings(wc.case, crosscheck=False),
         ref=lambda wc, input: f"--reference {input.ref}" if "ref" in input.keys() else "",
         role=lambda wc: hifi_role(wc.case),
+        reuse=lambda wc: hifi_reuse(wc.case),
         code=HIFI_CODE,
     wildcard_constraints:
         case="|".join(sorted(HIFI_CASES)),
@@ -269,7 +288,7 @@ rule hifi_virtual:
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage hifi-run --case {wildcards.case} --role {params.role} "
         "--settings '{params.settings}' --coverings {input.table2} --interface {input.interface} "
-        "{params.ref} --outdir {RES}/hifi/virtual/{wildcards.case} > {log} 2>&1"
+        "{params.ref} {params.reuse} --outdir {RES}/hifi/virtual/{wildcards.case} > {log} 2>&1"
 
 
 rule hifi_virtual_rom:
@@ -304,18 +323,21 @@ HIFI_CHAIN_TARGETS = [f"{RES}/hifi/interface.csv"] + [
 
 
 rule hifi_crosscheck_all:
-    """Table 3 from hi-fi runs at the paper's values (not part of `all` unless hifi.pipeline.in_all)."""
+    """Table 3 from hi-fi runs at the paper's values (in `all` when hifi.pipeline.in_all names crosscheck)."""
     input:
         HIFI_CROSSCHECK_TARGETS,
 
 
 rule hifi_chain_all:
-    """The Sec. 4.2 calibration chain and the virtual tests (not part of `all` unless hifi.pipeline.in_all)."""
+    """The Sec. 4.2 calibration chain and the virtual tests (in `all` when hifi.pipeline.in_all names chain)."""
     input:
         HIFI_CHAIN_TARGETS,
 
 
-if HIFI["in_all"]:
-    TARGETS.extend(HIFI_CROSSCHECK_TARGETS + HIFI_CHAIN_TARGETS)
+if "crosscheck" in HIFI["in_all"]:
+    TARGETS.extend(HIFI_CROSSCHECK_TARGETS)
+    FITS["hifi"] = FITS.get("hifi", []) + HIFI_CROSSCHECK_TARGETS
+if "chain" in HIFI["in_all"]:
     # the report lists the hi-fi results; as its inputs it is built after them
-    FITS["hifi"] = HIFI_CROSSCHECK_TARGETS + HIFI_CHAIN_TARGETS
+    TARGETS.extend(HIFI_CHAIN_TARGETS)
+    FITS["hifi"] = FITS.get("hifi", []) + HIFI_CHAIN_TARGETS
