@@ -1,9 +1,10 @@
-# Two commands from a fresh clone:  make reproduce  |  make test
+# Two commands from a fresh clone:  make reproduce [PROFILE=quick]  |  make test
 # Both create .venv when missing and install the package (editable) into it.
 PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
+PROFILE ?= default
 
 .PHONY: reproduce test venv bench clean-results
 
@@ -16,7 +17,7 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)
 
 reproduce: $(STAMP)
-	$(VENV)/bin/snakemake --cores 2
+	$(VENV)/bin/snakemake --cores 2 --config profile=$(PROFILE)
 
 test: $(STAMP)
 	$(PY) -m pytest
