@@ -6,7 +6,7 @@
 #       test of every case (incl. hifi.extra_cases) at the fitted interface.
 # `all` includes the groups named in hifi.pipeline.in_all (chain: about an hour at the default
 # profile on 2 cores; crosscheck: 5 more runs).
-# Every virtual test is one thread, so two run side by side; a fit step takes both cores.
+# Every virtual test is one thread, so two run side by side; a fit step takes its HIFI_STEPS cores.
 
 HIFI = config["hifi"]["pipeline"]
 HIFI_CASES = {**config["cases"], **config["hifi"]["extra_cases"]}
