@@ -11,6 +11,7 @@ import os
 import re
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import h5py
@@ -306,6 +307,40 @@ def test_cohesive_cases_side_by_side_match_serial(tmp_path, fake):
     for case in refs:
         summary = json.loads((tmp_path / "pooled" / case / "summary.json").read_text())
         assert summary["pid"] != os.getpid()       # the best point's run came from a worker
+
+
+POOL_OWNER = """
+import os, sys, time
+from harnesspipe.stages import hifi_chain
+with hifi_chain._case_pool(2) as pool:
+    pids = {pool.submit(os.getpid).result() for _ in range(8)}
+    print(*sorted(pids), flush=True)
+    time.sleep(600)
+"""
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie waiting for a reaper does not count)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def test_case_workers_end_with_a_killed_fit():
+    """A fit process killed outright (SIGKILL: no cleanup of its own runs) takes its
+    case workers with it within a few poll periods; they do not run on as orphans."""
+    owner = subprocess.Popen([sys.executable, "-c", POOL_OWNER], stdout=subprocess.PIPE, text=True)
+    try:
+        workers = [int(p) for p in owner.stdout.readline().split()]
+        assert workers and all(_alive(p) for p in workers)
+    finally:
+        owner.kill()
+        owner.wait()
+    deadline = time.monotonic() + 20 * hifi_chain.PARENT_POLL_S
+    while any(_alive(p) for p in workers) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not any(_alive(p) for p in workers), "case workers outlived the killed fit"
 
 
 def test_run_case_writes_artefacts_and_error(tmp_path, fake):

@@ -29,7 +29,9 @@ import copy
 import hashlib
 import json
 import multiprocessing
+import os
 import shutil
+import threading
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -284,20 +286,36 @@ class CaseRun:
         return run.curve["deflection_mm"].to_numpy(float), run.curve["force_N"].to_numpy(float), run
 
 
-def _one_thread() -> None:
+PARENT_POLL_S = 1.0   # how often a case worker checks that the fit process still lives
+
+
+def _exit_with(parent_pid: int) -> None:
+    """Poll until the process ``parent_pid`` is no longer this process's parent, then end
+    this process at once: a fit that is killed (Snakemake interrupt, kill -9) takes its
+    case workers with it instead of leaving them to run their hi-fi cases to the end."""
+    while os.getppid() == parent_pid:
+        time.sleep(PARENT_POLL_S)
+    os._exit(1)
+
+
+def _case_worker_init(parent_pid: int) -> None:
+    """Initializer of a case worker: one Numba thread, and exit with the parent."""
     import numba
     numba.set_num_threads(1)
+    threading.Thread(target=_exit_with, args=(parent_pid,), daemon=True).start()
 
 
 @contextlib.contextmanager
 def _case_pool(workers: int):
     """A pool of ``workers`` fresh processes of one Numba thread each (none for one worker).
-    Fresh (spawned) processes: no OpenMP state inherited through a fork."""
+    Fresh (spawned) processes: no OpenMP state inherited through a fork.  The workers end
+    when the process that made the pool ends, however it ends (:func:`_exit_with`)."""
     if workers < 2:
         yield None
         return
     ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_one_thread) as pool:
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_case_worker_init,
+                             initargs=(os.getpid(),)) as pool:
         yield pool
 
 
