@@ -387,16 +387,16 @@ def test_virtual_test_reuses_the_fits_run_only_when_it_is_the_same_run(tmp_path,
 
 def test_hifi_report_section(tmp_path, fake):
     from harnesspipe import config as cfgmod
-    from harnesspipe.report.html import hifi_section
+    from harnesspipe.report.html import _measured_by_case, hifi_section
     cfg = cfgmod.load()
-    assert "No hi-fi results yet" in hifi_section(tmp_path, cfg, [])
+    assert "No hi-fi results yet" in hifi_section(tmp_path, cfg, {})
     u = np.linspace(0.0, 30.0, 101)
     ref = write_prepared(tmp_path / "r.h5", "cwb19_t2_closed", fake.force(u, fake.TRUTH, "closed_tube"), u)
     hifi_chain.run_case("cwb19_t2_closed", {"model": MODEL, "interface": dict(fake.TRUTH)},
                         tmp_path / "hifi" / "virtual" / "cwb19_t2_closed", reference=ref, runner=runner_of(fake))
     (tmp_path / "hifi" / "interface.csv").write_text(
         "parameter,value\n" + "".join(f"{k},{v}\n" for k, v in fake.TRUTH.items()))
-    page = hifi_section(tmp_path, cfg, [ref])
+    page = hifi_section(tmp_path, cfg, _measured_by_case([ref]))
     assert "virtual test cwb19_t2_closed" in page and "Calibrated interface" in page and "Cost" in page
     assert page.count("data:image/png;base64,") >= 2 and "281 min" in page
 

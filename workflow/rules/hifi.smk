@@ -240,14 +240,12 @@ rule hifi_fit:
         settings=lambda wc: hifi_fit_settings(wc.step),
         refs=lambda wc: " ".join(f"{c}={hifi_prepared(c)}" for c in HIFI_STEPS[wc.step]["cases"]),
         code=HIFI_FIT_CODE,
-        n_cases=lambda wc: len(HIFI_STEPS[wc.step]["cases"]),
     wildcard_constraints:
         step="|".join(HIFI_STEPS),
     threads: lambda wc: HIFI_STEPS[wc.step]["cores"]     # see HIFI_STEPS
     priority: 10      # the chain is the longest path of the run: its steps go first
     shell:
-        "W=$(( {params.n_cases} < {threads} ? {params.n_cases} : {threads} )); "
-        "NUMBA_NUM_THREADS=$(( {threads} / W )) {HP} stage hifi-fit --step {wildcards.step} --workers $W "
+        "NUMBA_NUM_THREADS={threads} {HP} stage hifi-fit --step {wildcards.step} --cores {threads} "
         "--settings '{params.settings}' --reference {params.refs} --coverings {input.table2} "
         "--prior {input.priors} --outdir {RES}/hifi/chain/{wildcards.step} > {log} 2>&1"
 

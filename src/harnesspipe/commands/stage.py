@@ -96,8 +96,10 @@ def register(sub) -> None:
                    help="prepared test of every case of the step")
     p.add_argument("--coverings", type=Path, default=None, help="table2.csv of the tensile stage")
     p.add_argument("--prior", type=Path, nargs="*", default=[], help="fit.json of the earlier steps")
-    p.add_argument("--workers", type=int, default=1,
-                   help="processes that run the cases of one evaluation side by side (one thread each)")
+    p.add_argument("--cores", type=int, default=1,
+                   help="cores of the step: the cases of one evaluation run side by side in "
+                        "min(cores, cases) one-thread processes; a single case runs on the "
+                        "NUMBA_NUM_THREADS threads")
     p.add_argument("--outdir", type=Path, required=True)
     p.set_defaults(func=_hifi_fit)
 
@@ -197,10 +199,11 @@ def _hifi_fit(args) -> int:
     missing = [c for c in args.settings.get("cases", []) if c not in refs]
     if missing:
         raise InputError(f"--reference: no prepared test for {missing}")
-    if args.workers < 1:
-        raise InputError(f"--workers {args.workers}: expected a positive number of processes")
+    if args.cores < 1:
+        raise InputError(f"--cores {args.cores}: expected a positive number of cores")
+    workers = min(args.cores, max(len(args.settings.get("cases", [])), 1))
     fit = fit_step(args.step, args.settings, refs, args.outdir, table2=args.coverings, priors=args.prior,
-                   workers=args.workers)
+                   workers=workers)
     print(json.dumps(fit, indent=2))
     return 0
 

@@ -116,14 +116,12 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
     return f'<div>{text}<div class="fit">{"".join(figs)}</div></div>'
 
 
-def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth: dict) -> str:
+def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth: dict,
+                  measured: dict) -> str:
+    """A stage's fits; ``measured``: three-point tests by case (:func:`_measured_by_case`),
+    the band shown beside a hi-fi reference."""
     heading, _, table_name = STAGES[stage]
     blocks, summary = [], []
-    measured = {}              # three-point tests by case: the band beside a hi-fi reference
-    for p in sorted((results / "data").glob("*.h5")):
-        pr = read_prepared(p)
-        if pr.entry.get("kind") == "three_point":
-            measured[pr.entry["item"]] = pr
     for path in sorted(fits):
         fit = read_fit(path)
         prepared, reference = _reference_of(fit, results, measured)
@@ -203,7 +201,7 @@ def _hifi_run_block(title: str, folder: Path, measured) -> tuple[str, dict | Non
     return f'<div>{text}<div class="fit">{"".join(figs)}</div></div>', summary
 
 
-def hifi_section(results: Path, cfg: dict, prepared: list[Path]) -> str:
+def hifi_section(results: Path, cfg: dict, measured: dict) -> str:
     """Everything of results/hifi that exists: cross-check Table 3, the calibration chain,
     the interface beside the paper's, the virtual tests, their energies and the cost."""
     heading = f"<h2>{html.escape(STAGES['hifi'][0])}</h2>"
@@ -216,7 +214,6 @@ def hifi_section(results: Path, cfg: dict, prepared: list[Path]) -> str:
                 "hifi_crosscheck_all</code> (Table 3 at the paper's values) and <code>hifi_chain_all</code> "
                 "(the Sec. 4.2 calibration chain and the virtual tests) write them under "
                 "<code>results/hifi/</code>; hours at the default profile.</p>")
-    measured = _measured_by_case(prepared)
     paper = cfg.get("paper", {})
     parts = [heading, "<p class='note'>Explicit mesoscale model of the three-point test (Sec. 4.1). "
              "The cross-check runs use the paper's Table 2 and interface values; the calibration chain "
@@ -357,11 +354,12 @@ def build(out: Path, *, cfg: dict, results: Path, check_summary: Path,
     parts = [f"<h1>harnesspipe report</h1><p class='note'>harnesspipe {__version__}, "
              f"profile <b>{html.escape(cfg['profile'])}</b>. Units mm, N, MPa.</p>",
              data_section(Path(check_summary).read_text().strip(), prepared, truth)]
+    measured = _measured_by_case(prepared)
     for stage in STAGES:
         if stage == "hifi":
-            parts.append(hifi_section(results, cfg, prepared))
+            parts.append(hifi_section(results, cfg, measured))
         elif fits.get(stage):
-            parts.append(stage_section(stage, fits[stage], results, cfg, truth))
+            parts.append(stage_section(stage, fits[stage], results, cfg, truth, measured))
     page = ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
             "<title>harnesspipe report</title><style>" + CSS + "</style></head><body>"
             + "".join(parts) + "</body></html>\n")
