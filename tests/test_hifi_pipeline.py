@@ -93,13 +93,17 @@ def runner_of(fake):
     return fake.runner
 
 
-def write_prepared(path: Path, case: str, F: np.ndarray, grid: np.ndarray) -> Path:
+def write_prepared(path: Path, case: str, F: np.ndarray, grid: np.ndarray, scatter: float = 0.0) -> Path:
+    """A prepared three-point test: one replicate ``F`` or, with ``scatter`` d, three
+    replicates (1 - d, 1, 1 + d) F of mean F."""
+    factors = (1.0 - scatter, 1.0, 1.0 + scatter) if scatter else (1.0,)
     with h5py.File(path, "w") as f:
         f.attrs["test_id"] = f"bend_{case}"
         f.attrs["entry"] = json.dumps({"kind": "three_point", "item": case})
         f["grid"], f["mean"], f["lo"], f["hi"] = grid, F, 0.95 * F, 1.05 * F
-        g = f.create_group("samples/s1")
-        g["time_s"], g["displacement_mm"], g["force_N"] = grid / 0.5, grid, F
+        for k, c in enumerate(factors):
+            g = f.create_group(f"samples/s{k + 1}")
+            g["time_s"], g["displacement_mm"], g["force_N"] = grid / 0.5, grid, c * F
     return path
 
 
@@ -119,6 +123,46 @@ def test_bounded_fit_recovers_a_parameter(tmp_path):
     res = hcal.bounded_fit(obj, "c", (0.0, 1.0), xatol=1e-5, log_path=tmp_path / "log.h5", maxfev=40)
     assert res.x[0] == pytest.approx(0.37, abs=1e-4)
     assert res.nfev == len(res.trace) and res.nfev <= 40
+
+
+def test_standard_error_of_the_measured_mean(tmp_path):
+    """Replicates (1 -+ d) F and F: sample deviation d F, standard error d F / sqrt(3)."""
+    from harnesspipe.stages.data import read_prepared
+    F = analytic(GRID, 0.4)
+    three = read_prepared(write_prepared(tmp_path / "a.h5", "c", F, GRID, scatter=0.1))
+    assert np.allclose(three.standard_error(), 0.1 * F / np.sqrt(3.0), rtol=1e-12, atol=1e-12)
+    one = read_prepared(write_prepared(tmp_path / "b.h5", "c", F, GRID))
+    assert np.all(one.standard_error() == 0.0)
+
+
+@pytest.mark.parametrize("slope, stops", [(1e-3, True), (50.0, False)])
+def test_flat_screen_ends_a_bounded_search_only_on_a_flat_error(tmp_path, slope, stops):
+    """Brent's first two points (0.382, 0.618) differ by slope x 0.1 in error: below the
+    floor 0.1 the search stops there, keeping the better one; above it, it goes on to the
+    minimum."""
+    def objective(x):
+        return 10.0 + slope * abs(x[0] - 0.45)
+
+    res = hcal.bounded_fit(objective, "mu", (0.0, 1.0), xatol=1e-4, maxfev=40,
+                           log_path=tmp_path / "log.h5", stop=hcal.flat_screen(2, 0.1))
+    if stops:
+        assert res.nfev == 2 and "not identifiable" in res.message and not res.converged
+        assert res.x[0] == pytest.approx(0.381966, abs=1e-5) and res.fun == res.trace["error"].min()
+    else:
+        assert res.nfev > 2 and res.x[0] == pytest.approx(0.45, abs=1e-3)
+
+
+def test_flat_screen_ends_nelder_mead_after_its_first_simplex(tmp_path):
+    """Three parameters: the +5 % simplex is 4 evaluations; a flat error stops it there, a
+    rejected point among them does not."""
+    flat = hcal.simplex_fit(lambda x: 5.0 + 1e-4 * x.sum(), {"a": 1.0, "b": 2.0, "c": 3.0}, xatol=1e-6,
+                            fatol=1e-9, maxfev=50, stop=hcal.flat_screen(4, 0.01))
+    assert flat.nfev == 4 and "not identifiable" in flat.message
+    assert flat.params() == {"a": 1.0, "b": 2.0, "c": 3.0}        # the lowest error: the start
+    rejected = hcal.simplex_fit(lambda x: np.inf if x[0] > 1.01 else 5.0 + 1e-4 * x.sum(),
+                                {"a": 1.0, "b": 2.0, "c": 3.0}, xatol=1e-6, fatol=1e-9, maxfev=12,
+                                stop=hcal.flat_screen(4, 0.01))
+    assert rejected.nfev > 4
 
 
 def test_failed_run_is_a_logged_rejected_point(tmp_path):
@@ -245,6 +289,27 @@ def test_fit_step_and_interface_table(tmp_path, fake):
                                        tmp_path / "interface.csv")
     assert list(table["parameter"]) == list(hifi_chain.INTERFACE)
     assert list(pd.read_csv(tmp_path / "interface.csv").columns) == ["parameter", "value"]
+
+
+@pytest.mark.parametrize("scatter, flat_factor, screened", [(0.2, 1.0, True), (0.05, 1.0, False),
+                                                            (0.2, 0.0, False)])
+def test_fit_step_screens_against_the_scatter_of_the_measured_mean(tmp_path, fake, scatter,
+                                                                   flat_factor, screened):
+    """mu_rtb in [0, 0.3]: Brent's first points move the fake's error by 0.14 ||u||; three
+    replicates +-20 % put the standard error of the mean at 0.22 ||u||: not identifiable,
+    the step ends after 2 evaluations and says so; +-5 % (0.055 ||u||) or the screen off
+    (flat_factor 0): the search goes on."""
+    u = np.linspace(0.0, 30.0, 101)
+    refs = {"cwb19_t2_closed": write_prepared(tmp_path / "closed.h5", "cwb19_t2_closed",
+                                              fake.force(u, fake.TRUTH, "closed_tube"), u, scatter=scatter)}
+    settings = {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": [0.0, 20.0], "method": "bounded",
+                "bounds": [0.0, 0.3], "xatol": 1e-3, "fatol": None, "maxfev": 30, "flat_factor": flat_factor,
+                "start": {"mu_rtp": 0.1, "delta0": 0.05, "delta_f": 0.1, "alpha_d": 1.0},
+                "models": {"cwb19_t2_closed": MODEL}, "set": {}}
+    fit = hifi_chain.fit_step("mu_rtb", settings, refs, tmp_path / "fit", runner=runner_of(fake))
+    assert (fit["nfev"] == 2) == screened
+    assert ("not identifiable" in fit["message"]) == screened
+    assert fit["parameters"]["mu_rtb"] == pytest.approx(0.1854 if screened else 0.3, abs=2e-3)
 
 
 def test_cohesive_simplex_step_on_two_cases(tmp_path, fake):

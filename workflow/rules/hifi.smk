@@ -94,6 +94,7 @@ def hifi_fit_settings(step):
         "xatol": HIFI["bounded_xatol"] if bounded else HIFI["simplex"]["xatol"],
         "fatol": None if bounded else HIFI["simplex"]["fatol"],
         "maxfev": HIFI_BUDGET["bounded_maxfev" if bounded else "simplex_maxfev"],
+        "flat_factor": HIFI["flat_factor"],
         "start": start, "models": {c: hifi_model(c) for c in s["cases"]},
         "set": {**hifi_fit_stop(HIFI[s["window"]]), **HIFI["set"]},
     }, sort_keys=True)

@@ -24,7 +24,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from harnesspipe.calibrate.objective import l2_error, on_grid
-from harnesspipe.calibrate.simplex import EvaluationLog, FitResult, logged_call, nelder_mead
+from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, best_logged, check_stop,
+                                          logged_call, nelder_mead)
 
 REJECT_FACTOR = 10.0
 #: a simulated curve may end this fraction of the window's end short of it (the feeder stops
@@ -167,22 +168,57 @@ def read_rejected(path: Path, key: str | None = None) -> list[dict]:
 
 
 def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, key="",
-                maxfev: int = 30) -> FitResult:
-    """Brent's bounded search for one parameter, every evaluation logged (and replayed)."""
+                maxfev: int = 30, stop=None) -> FitResult:
+    """Brent's bounded search for one parameter, every evaluation logged (and replayed).
+    ``stop``: as in :func:`harnesspipe.calibrate.simplex.nelder_mead`."""
     log = EvaluationLog(log_path, [name], key)
 
     def wrapped(c):
-        return logged_call(log, objective, np.array([c], dtype=float))
+        err = logged_call(log, objective, np.array([c], dtype=float))
+        check_stop(stop, log)
+        return err
 
-    res = minimize_scalar(wrapped, bounds=tuple(bounds), method="bounded",
-                          options={"xatol": xatol, "maxiter": maxfev})
+    try:
+        res = minimize_scalar(wrapped, bounds=tuple(bounds), method="bounded",
+                              options={"xatol": xatol, "maxiter": maxfev})
+    except StopSearch as reason:
+        x, fun = best_logged(log)
+        return FitResult(names=[name], x=np.array(x, dtype=float), fun=fun, nfev=len(log.rows),
+                         converged=False, message=str(reason), trace=log.frame())
     return FitResult(names=[name], x=np.array([res.x]), fun=float(res.fun), nfev=len(log.rows),
                      converged=bool(res.success), message=str(res.message), trace=log.frame())
 
 
 def simplex_fit(objective, x0: dict, *, xatol: float, fatol: float, maxfev: int, log_path=None,
-                key="") -> FitResult:
+                key="", stop=None) -> FitResult:
     """The paper's Nelder-Mead (+5 % simplex) on several parameters."""
     names = list(x0)
     return nelder_mead(objective, np.array([x0[k] for k in names]), names, xatol=xatol,
-                       fatol=fatol, maxfev=maxfev, log_path=log_path, key=key)
+                       fatol=fatol, maxfev=maxfev, log_path=log_path, key=key, stop=stop)
+
+
+def flat_screen(n_first: int, floor: float):
+    """Identifiability screen, a ``stop`` rule for the searches above.
+
+    Once the search has made its first ``n_first`` evaluations -- Brent's two
+    golden-section points (2), or the +5 % simplex (number of parameters + 1) -- it
+    ends the search if their errors (eq. 4) differ by less than ``floor``: the l2 norm,
+    over the fit's window, of the standard error of the measured mean (summed over the
+    cases like the error).  Parameters whose effect on the error stays within the
+    uncertainty of the measured mean are not identified by the data; the search would
+    only chase that uncertainty.  A rejected point (infinite error) never stops it.
+    ``floor`` <= 0 disables the screen.
+    """
+    def stop(rows) -> str | None:
+        if floor <= 0.0 or len(rows) != n_first:
+            return None
+        errors = np.array([r[1] for r in rows])
+        if not np.all(np.isfinite(errors)):
+            return None
+        spread = float(errors.max() - errors.min())
+        if spread >= floor:
+            return None
+        return (f"not identifiable from this data: the errors of the first {n_first} evaluations "
+                f"differ by {spread:.3g} N, less than the standard error of the measured mean "
+                f"({floor:.3g} N, l2 over the window); the best of them is kept")
+    return stop

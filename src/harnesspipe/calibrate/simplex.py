@@ -105,6 +105,24 @@ class EvaluationLog:
         return pd.DataFrame(data)
 
 
+class StopSearch(Exception):
+    """Raised by a search's ``stop`` rule to end it early; the message says why."""
+
+
+def check_stop(stop, log: EvaluationLog) -> None:
+    """Raise :class:`StopSearch` if the rule ``stop(rows) -> reason | None`` says so."""
+    reason = stop(log.rows) if stop is not None else None
+    if reason:
+        raise StopSearch(reason)
+
+
+def best_logged(log: EvaluationLog) -> tuple[np.ndarray, float]:
+    """The logged point of smallest finite error (inf error if none is finite)."""
+    errors = np.array([r[1] if np.isfinite(r[1]) else np.inf for r in log.rows])
+    i = int(np.argmin(errors))
+    return log.rows[i][0], float(errors[i])
+
+
 def logged_call(log: EvaluationLog, objective, x: np.ndarray) -> float:
     """objective(x), replayed from the log when it holds the same point next, and logged."""
     hit = log.lookup(x)
@@ -129,7 +147,7 @@ def evaluate_logged(objective, x0, names, *, log_path=None, key="") -> FitResult
 
 def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
                 log_path=None, key="", restarts=0, start_scaling=None,
-                step=SIMPLEX_STEP) -> FitResult:
+                step=SIMPLEX_STEP, stop=None) -> FitResult:
     """Minimise ``objective(x) -> float`` by Nelder-Mead from the paper's simplex.
 
     ``xatol`` is relative to ``x0`` (the search runs on x / x0, so parameters of
@@ -143,6 +161,9 @@ def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
     ``start_scaling=(lo, hi)``: before the simplex, a bounded 1-D search for the
     factor c in [lo, hi] minimising objective(c x0) moves the start to c x0 (its
     evaluations are logged like all others).
+    ``stop(rows) -> reason | None``, asked after every evaluation with the logged rows
+    (parameters, error, wall time): a reason ends the search at once, at the best point
+    so far, with the reason as its message.
     ``key`` identifies the objective (e.g. a hash of its data and settings): a log
     written under another key is discarded instead of replayed.
     """
@@ -152,25 +173,30 @@ def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
 
     def wrapped(z):
         err = logged_call(log, objective, z * scale)
+        check_stop(stop, log)
         return err if np.isfinite(err) else np.inf
 
     z, best, converged, message = x0 / scale, np.inf, False, ""
-    if start_scaling is not None:
-        line = minimize_scalar(lambda c: wrapped(c * z), bounds=start_scaling, method="bounded",
-                               options={"xatol": 1e-3})
-        z = line.x * z
-    for _ in range(restarts + 1):
-        budget = maxfev - len(log.rows)
-        if budget < len(x0) + 2:
-            break
-        res = minimize(wrapped, z, method="Nelder-Mead",
-                       options={"initial_simplex": initial_simplex(z * scale, step) / scale,
-                                "xatol": xatol, "fatol": fatol, "maxfev": budget, "adaptive": False})
-        improved = best - float(res.fun)
-        if res.fun < best:
-            z, best = res.x, float(res.fun)
-        converged, message = bool(res.success), str(res.message)
-        if improved <= fatol:
-            break
+    try:
+        if start_scaling is not None:
+            line = minimize_scalar(lambda c: wrapped(c * z), bounds=start_scaling, method="bounded",
+                                   options={"xatol": 1e-3})
+            z = line.x * z
+        for _ in range(restarts + 1):
+            budget = maxfev - len(log.rows)
+            if budget < len(x0) + 2:
+                break
+            res = minimize(wrapped, z, method="Nelder-Mead",
+                           options={"initial_simplex": initial_simplex(z * scale, step) / scale,
+                                    "xatol": xatol, "fatol": fatol, "maxfev": budget, "adaptive": False})
+            improved = best - float(res.fun)
+            if res.fun < best:
+                z, best = res.x, float(res.fun)
+            converged, message = bool(res.success), str(res.message)
+            if improved <= fatol:
+                break
+    except StopSearch as reason:
+        x_best, best = best_logged(log)
+        z, converged, message = x_best / scale, False, str(reason)
     return FitResult(names=list(names), x=z * scale, fun=best, nfev=len(log.rows),
                      converged=converged, message=message, trace=log.frame())

@@ -70,6 +70,15 @@ class Prepared:
     hi: np.ndarray
     samples: dict[str, dict[str, np.ndarray]]
 
+    def standard_error(self) -> np.ndarray:
+        """Standard error of the mean curve on ``grid``: the replicates' sample standard
+        deviation over sqrt(n) (zero for a single replicate)."""
+        F = np.array([np.interp(self.grid, s["displacement_mm"], s["force_N"])
+                      for s in self.samples.values()])
+        if F.shape[0] < 2:
+            return np.zeros_like(self.grid)
+        return F.std(axis=0, ddof=1) / np.sqrt(F.shape[0])
+
 
 def read_prepared(path: Path) -> Prepared:
     with h5py.File(path, "r") as f:

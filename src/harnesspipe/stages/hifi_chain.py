@@ -189,7 +189,10 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
     ``settings``: ``names`` (fitted parameters), ``cases``, ``window`` ([lo, hi] mm),
     ``method`` (``bounded`` | ``simplex``), ``bounds`` (bounded), ``xatol``, ``fatol``
     (simplex), ``maxfev``, ``start`` (interface values before this step: the config's
-    initial guesses), ``models`` (case -> model config), ``set``.  ``priors``: fit.json
+    initial guesses), ``models`` (case -> model config), ``set``, ``flat_factor``
+    (optional, 0 if absent: the identifiability screen :func:`hcal.flat_screen` stops a
+    search whose first evaluations differ by less than this many times the l2 standard
+    error of the measured means over the window).  ``priors``: fit.json
     of the earlier steps, whose fitted parameters replace the start values.  ``workers``
     > 1: the cases of each evaluation run side by side in that many processes
     (``runner`` must then be picklable).
@@ -227,7 +230,9 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
         t0 = time.perf_counter()
         res = _inert_cohesion(step, settings, objective, names, fixed, live, key, runs, cases)
         if res is None:
-            res = _search(step, settings, objective, names, fixed, live, key)
+            floor = sum(float(np.linalg.norm(refs[c].standard_error()[hcal.window_mask(refs[c].grid, window)]))
+                        for c in cases)
+            res = _search(step, settings, objective, names, fixed, live, key, floor)
     best = objective.params(res.x)
     rejected_keys = {_pkey(r["parameters"]) for r in hcal.read_rejected(rejected_live, key)}
     if not np.isfinite(res.fun) or _pkey(best) in rejected_keys:
@@ -319,17 +324,21 @@ def _case_pool(workers: int):
         yield pool
 
 
-def _search(step, settings, objective, names, fixed, live, key):
-    """The bounded search (one parameter) or Nelder-Mead (several) of a fit step."""
+def _search(step, settings, objective, names, fixed, live, key, floor):
+    """The bounded search (one parameter) or Nelder-Mead (several) of a fit step, with the
+    identifiability screen :func:`hcal.flat_screen` at ``floor`` x ``flat_factor``."""
     log = live / "evaluations.h5"
+    floor = floor * float(settings.get("flat_factor", 0.0))
     if settings["method"] == "bounded":
         if len(names) != 1:
             raise ConfigError(f"hifi fit {step}: a bounded search fits one parameter, not {names}")
         return hcal.bounded_fit(objective, names[0], settings["bounds"], xatol=settings["xatol"],
-                                log_path=log, key=key, maxfev=settings["maxfev"])
+                                log_path=log, key=key, maxfev=settings["maxfev"],
+                                stop=hcal.flat_screen(2, floor))
     if settings["method"] == "simplex":
         return hcal.simplex_fit(objective, {k: fixed[k] for k in names}, xatol=settings["xatol"],
-                                fatol=settings["fatol"], maxfev=settings["maxfev"], log_path=log, key=key)
+                                fatol=settings["fatol"], maxfev=settings["maxfev"], log_path=log, key=key,
+                                stop=hcal.flat_screen(len(names) + 1, floor))
     raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex")
 
 
