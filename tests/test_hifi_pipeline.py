@@ -312,6 +312,15 @@ def test_fit_step_screens_against_the_scatter_of_the_measured_mean(tmp_path, fak
     assert fit["parameters"]["mu_rtb"] == pytest.approx(0.1854 if screened else 0.3, abs=2e-3)
 
 
+def test_flat_screen_is_not_fooled_by_rejected_points():
+    """Rejected runs score the objective's penalty: two of them are no flat error."""
+    penalty = 1e3
+    res = hcal.bounded_fit(lambda x: penalty if x[0] > 0.36 else 10.0 + x[0], "mu", (0.3, 0.6),
+                           xatol=1e-3, maxfev=20, stop=hcal.flat_screen(2, 1.0, penalty))
+    assert res.trace["error"].iloc[:2].tolist() == [penalty, penalty]
+    assert res.nfev > 2 and "not identifiable" not in res.message
+
+
 def test_cohesive_simplex_step_on_two_cases(tmp_path, fake):
     u = np.linspace(0.0, 30.0, 101)
     truth = {**fake.TRUTH}

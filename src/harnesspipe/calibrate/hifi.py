@@ -197,7 +197,7 @@ def simplex_fit(objective, x0: dict, *, xatol: float, fatol: float, maxfev: int,
                        fatol=fatol, maxfev=maxfev, log_path=log_path, key=key, stop=stop)
 
 
-def flat_screen(n_first: int, floor: float):
+def flat_screen(n_first: int, floor: float, penalty: float = np.inf):
     """Identifiability screen, a ``stop`` rule for the searches above.
 
     Once the search has made its first ``n_first`` evaluations -- Brent's two
@@ -206,14 +206,15 @@ def flat_screen(n_first: int, floor: float):
     over the fit's window, of the standard error of the measured mean (summed over the
     cases like the error).  Parameters whose effect on the error stays within the
     uncertainty of the measured mean are not identified by the data; the search would
-    only chase that uncertainty.  A rejected point (infinite error) never stops it.
-    ``floor`` <= 0 disables the screen.
+    only chase that uncertainty.  A rejected point among them -- an error not finite or
+    at least ``penalty`` (:attr:`HifiObjective.penalty`, the score of a failed run) --
+    never stops it.  ``floor`` <= 0 disables the screen.
     """
     def stop(rows) -> str | None:
         if floor <= 0.0 or len(rows) != n_first:
             return None
         errors = np.array([r[1] for r in rows])
-        if not np.all(np.isfinite(errors)):
+        if not np.all(errors < penalty):       # also False for nan and inf
             return None
         spread = float(errors.max() - errors.min())
         if spread >= floor:

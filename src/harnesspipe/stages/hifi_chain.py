@@ -334,11 +334,11 @@ def _search(step, settings, objective, names, fixed, live, key, floor):
             raise ConfigError(f"hifi fit {step}: a bounded search fits one parameter, not {names}")
         return hcal.bounded_fit(objective, names[0], settings["bounds"], xatol=settings["xatol"],
                                 log_path=log, key=key, maxfev=settings["maxfev"],
-                                stop=hcal.flat_screen(2, floor))
+                                stop=hcal.flat_screen(2, floor, objective.penalty))
     if settings["method"] == "simplex":
         return hcal.simplex_fit(objective, {k: fixed[k] for k in names}, xatol=settings["xatol"],
                                 fatol=settings["fatol"], maxfev=settings["maxfev"], log_path=log, key=key,
-                                stop=hcal.flat_screen(len(names) + 1, floor))
+                                stop=hcal.flat_screen(len(names) + 1, floor, objective.penalty))
     raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex")
 
 
