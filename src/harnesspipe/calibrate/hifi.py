@@ -181,12 +181,11 @@ def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, ke
     try:
         res = minimize_scalar(wrapped, bounds=tuple(bounds), method="bounded",
                               options={"xatol": xatol, "maxiter": maxfev})
+        x, fun, converged, message = [res.x], float(res.fun), bool(res.success), str(res.message)
     except StopSearch as reason:
-        x, fun = best_logged(log)
-        return FitResult(names=[name], x=np.array(x, dtype=float), fun=fun, nfev=len(log.rows),
-                         converged=False, message=str(reason), trace=log.frame())
-    return FitResult(names=[name], x=np.array([res.x]), fun=float(res.fun), nfev=len(log.rows),
-                     converged=bool(res.success), message=str(res.message), trace=log.frame())
+        (x, fun), converged, message = best_logged(log), False, str(reason)
+    return FitResult(names=[name], x=np.array(x, dtype=float), fun=fun, nfev=len(log.rows),
+                     converged=converged, message=message, trace=log.frame())
 
 
 def simplex_fit(objective, x0: dict, *, xatol: float, fatol: float, maxfev: int, log_path=None,

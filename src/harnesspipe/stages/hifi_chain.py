@@ -230,9 +230,8 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
         t0 = time.perf_counter()
         res = _inert_cohesion(step, settings, objective, names, fixed, live, key, runs, cases)
         if res is None:
-            floor = sum(float(np.linalg.norm(refs[c].standard_error()[hcal.window_mask(refs[c].grid, window)]))
-                        for c in cases)
-            res = _search(step, settings, objective, names, fixed, live, key, floor)
+            res = _search(step, settings, objective, names, fixed, live, key,
+                          _mean_uncertainty(refs, window))
     best = objective.params(res.x)
     rejected_keys = {_pkey(r["parameters"]) for r in hcal.read_rejected(rejected_live, key)}
     if not np.isfinite(res.fun) or _pkey(best) in rejected_keys:
@@ -322,6 +321,13 @@ def _case_pool(workers: int):
     with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_case_worker_init,
                              initargs=(os.getpid(),)) as pool:
         yield pool
+
+
+def _mean_uncertainty(refs: dict, window) -> float:
+    """l2 norm of the standard error of the measured mean over ``window``, summed over the
+    cases like the error (eq. 4): the floor of the identifiability screen."""
+    return sum(float(np.linalg.norm(r.standard_error()[hcal.window_mask(r.grid, window)]))
+               for r in refs.values())
 
 
 def _search(step, settings, objective, names, fixed, live, key, floor):
