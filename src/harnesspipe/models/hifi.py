@@ -91,11 +91,17 @@ def _shell_materials(mesh, inp: HifiInputs):
     return mat, thick, f_m * rho
 
 
-class HifiSystem:
-    """The assembled virtual three-point test; the system protocol of :mod:`harnesspipe.fe.dynamics`."""
+class BundleSystem:
+    """A bundle of wires with its coverings, tape, contacts and cohesive ties, integrated by
+    :mod:`harnesspipe.fe.dynamics`; the loading (pins, clamps, a strand) is the subclass's.
+
+    Subclasses set ``free``, add their loading contacts in :meth:`_loading_forces` (into the
+    families ``pin_contact`` / ``pin_friction``), move their rigid bodies in
+    :meth:`_move_loading` and supply ``external_work`` and ``observe``.
+    """
 
     families = FAMILIES
-    driven = "pin_contact"      # the family the pins' external work is credited to
+    driven = "pin_contact"      # the family the prescribed bodies' external work is credited to
 
     def __init__(self, mesh, inp: HifiInputs):
         self.mesh, self.inp = mesh, inp
@@ -121,12 +127,7 @@ class HifiSystem:
             self.smat, self.sthick, self.srho = _shell_materials(mesh, inp)
             self.sstate = init_shell_state(mesh.X, self.sconn, self.sthick, mesh.shell_axis)
             self.s_el = np.zeros((self.sconn.shape[0], 4, 6))
-        tp = inp.config["three_point"]
-        self.pins = Pins(mesh.rollers["centres"], mesh.rollers["radius"], 2, tp["deflection"], self.T)
         self.free = np.ones((n, 6), dtype=np.bool_)
-        centre = int(np.argmin(np.hypot(*mesh.wire_yz.T)))
-        mid = mesh.wire_nodes[centre, mesh.wire_nodes.shape[1] // 2]
-        self.free[mid, 0] = self.free[mid, 2] = False    # axial and lateral rigid-body modes
         self.c_damp = float(ex["mass_damping"])
         self.F = np.zeros((len(FAMILIES), n, 6))
         self._scratch = np.zeros((n, 6))
@@ -137,14 +138,17 @@ class HifiSystem:
         self.shell_mass_scale = self._scale_to_wire_step()
         self.dt0 = 2.0 / np.sqrt(self.node_omega2().max())
         self._setup_contacts()
-        self._unbounded = np.full(3, np.inf)         # pins are infinitely long cylinders
         self.phase = {k: 0.0 for k in ("elements", "contact search", "contact forces", "cohesive")}
         self.pairs_max = 0
         self.active = 0
-        self.f_pin_prev = np.zeros_like(self.pins.force)
-        self.impulse = np.zeros_like(self.pins.force)
-        self.impulse_u = self.impulse_time = self.u_prev = 0.0
-        self.c_prev = self.pins.centres.copy()
+
+    def _loading_forces(self, v, dt, F) -> int:
+        """Add the loading's contact forces to ``F``; returns the number of active contacts."""
+        raise NotImplementedError
+
+    def _move_loading(self, t) -> None:
+        raise NotImplementedError
+
 
     # -- set-up -----------------------------------------------------------------
     def _scale_to_wire_step(self) -> dict:
@@ -197,36 +201,15 @@ class HifiSystem:
         return self.inp.explicit[key] * float(np.min(masses)) / self.dt0**2
 
     def _setup_contacts(self):
-        mesh, itf = self.mesh, self.inp.interface
+        mesh = self.mesh
         m = self.mass[:, 0]
         self.k_ww = self._penalty(m[:self.nw])
         self.ww_hist = ce.new_slot_history(self.seg.shape[0], points=ce.WW_POINTS)
         self.ww_pairs = np.zeros((0, 2), dtype=np.int64)
-        # pins: the wires as chains; shell nodes in one group per friction coefficient (own
-        # penalty from the group's lightest node)
-        part_nodes = {}
-        if self.has_shells:
-            for part in (hm.PART_TUBE, hm.PART_FABRIC, hm.PART_TAPE):
-                sel = mesh.shell_part == part
-                if sel.any():
-                    nodes = np.unique(self.sconn[sel])
-                    r = np.zeros(nodes.size)
-                    np.maximum.at(r, np.searchsorted(nodes, self.sconn[sel].ravel()),
-                                  np.repeat(0.5 * mesh.shell_thickness[sel], 4))
-                    part_nodes[part] = (nodes, r)
         wn = np.arange(self.nw, dtype=np.int64)
-        wr = mesh.wire_radius[np.repeat(np.arange(mesh.n_wires), mesh.wire_nodes.shape[1])]
-        self.wire_pins = self._wire_pin_contact(m)
-        groups = []
-        for part, (nodes, r) in part_nodes.items():
-            mu = itf["mu_rtp"] if part == hm.PART_TAPE else itf["mu_rtb"]
-            groups.append((nodes[~np.isin(nodes, wn)], r[~np.isin(nodes, wn)], mu))
-        self.pin_groups = []
-        for nodes, r, mu in groups:
-            k = self._penalty(m[nodes])
-            self.pin_groups.append(dict(nodes=nodes, r=np.ascontiguousarray(r, dtype=float),
-                                        mu=np.full(nodes.size, float(mu)), k=k,
-                                        hist=np.zeros((nodes.size, 3, 3))))
+        wr = np.zeros(self.nw)
+        for a in range(2):
+            wr[self.seg[:, a]] = self.seg_r
         # wires (and tape) against the covering and tape facets
         self.facet_sets = []
         self.cut = None
@@ -246,17 +229,6 @@ class HifiSystem:
             if mesh.cut_pairs.size:
                 self._cut_contact()
 
-    def _wire_pin_contact(self, m) -> dict:
-        """The wires against the pins as chains (:func:`ce.chain_cylinder_contact`): the
-        segments of each wire run consecutively along it in ``seg``."""
-        body = self.seg_body
-        if np.any(np.diff(body) < 0) or np.any(self.seg[1:, 0][body[1:] == body[:-1]]
-                                                != self.seg[:-1, 1][body[1:] == body[:-1]]):
-            raise ValueError("hi-fi mesh: wire segments must run consecutively along each wire")
-        start = np.searchsorted(body, np.arange(self.mesh.n_wires + 1)).astype(np.int64)
-        return dict(start=start, mu=float(self.inp.interface["mu_rtb"]),
-                    k=self._penalty(m[:self.nw]), hist=np.zeros((self.mesh.n_wires, 3, 3)))
-
     def _cut_contact(self):
         """Self-contact across the open tube's cut (node pairs ``a`` at phi = 0, ``b`` at
         phi = 2 pi, coincident at the start): the cut may open freely but its edges cannot
@@ -267,13 +239,7 @@ class HifiSystem:
         not resisted (one wall thickness, the ridged tube's 1.7 mm, is not resolved there)."""
         mesh = self.mesh
         a, b = mesh.cut_pairs[:, 0].astype(np.int64), mesh.cut_pairs[:, 1].astype(np.int64)
-        tube = self.sconn[mesh.shell_part == hm.PART_TUBE]
-        nbr = np.empty_like(a)
-        for j, node in enumerate(a):
-            cand = np.unique(tube[np.any(tube == node, axis=1)])
-            cand = cand[(cand != node) & (np.abs(mesh.X[cand, 0] - mesh.X[node, 0]) < 1e-6)]
-            cand = cand[~np.isin(cand, b)]
-            nbr[j] = cand[np.argmin(np.linalg.norm(mesh.X[cand] - mesh.X[node], axis=1))]
+        nbr = mesh.cut_next.astype(np.int64)
         self.cut = (a, b, nbr, self._penalty(self.mass[np.r_[a, b], 0]))
 
     def _cut_forces(self, fn) -> int:
@@ -440,8 +406,7 @@ class HifiSystem:
     def advance(self, du, t):
         self.x += du[:, :3]
         rotate_nodes(self.quat[:self.nw], np.ascontiguousarray(du[:self.nw, 3:]))
-        self.c_prev[...] = self.pins.centres
-        self.pins.move_to(t)
+        self._move_loading(t)
 
     def _search(self):
         """Candidate pairs of every contact set, boxes padded by ``margin``."""
@@ -501,7 +466,7 @@ class HifiSystem:
 
     def _contact_forces(self, v, dt, F) -> int:
         itf = self.inp.interface
-        fn, ft, pn, pt = F[1], F[2], F[3], F[4]
+        fn, ft = F[1], F[2]
         active = ce.beam_beam_contact(self.x, v, self.seg, self.seg_r, self.seg_body,
                                       self.ww_pairs, self.k_ww, self.k_ww, itf["mu_s"],
                                       itf["mu_k"], itf["d_c"], dt, self.time_scale,
@@ -514,17 +479,7 @@ class HifiSystem:
                                             fs["sign"], fs["pairs"], fs["k"], fs["k"], mu_s, mu_k,
                                             d_c, dt, self.time_scale, fs["pen_max"],
                                             fs["hist"][0], fs["hist"][1], fn, ft)
-        p = self.pins
-        p.force[...] = 0.0
-        w = self.wire_pins
-        active += ce.chain_cylinder_contact(self.x, v, self.seg, self.seg_r, w["start"], w["mu"],
-                                            p.centres, p.axes, p.radii, p.velocity, w["k"],
-                                            w["k"], dt, w["hist"], pn, pt, p.force)
-        for g in self.pin_groups:
-            active += ce.node_cylinder_contact(self.x, v, g["nodes"], g["r"], g["mu"], p.centres,
-                                               p.axes, p.radii, self._unbounded, p.velocity,
-                                               g["k"], g["k"], dt, g["hist"], pn, pt, p.force)
-        return active
+        return active + self._loading_forces(v, dt, F)
 
     def _cohesive_forces(self, fc):
         itf = self.inp.interface
@@ -541,19 +496,6 @@ class HifiSystem:
                                       ties["tie_axis"], ties["tie_area"], self.seg, self.K_coh,
                                       self.delta0, itf["delta_f"], itf["alpha_d"],
                                       ties["tie_kappa"], ties["tie_D"], ties["tie_energy"], fc)
-
-    def external_work(self, t0, t1) -> float:
-        """Work of the pins on the system: F_on_system = -force on the pin.  Also adds the
-        step's impulse of the pin forces (trapezoidal) for :meth:`observe`."""
-        dc = self.pins.centres - self.c_prev
-        w = -0.5 * float(np.sum((self.f_pin_prev + self.pins.force) * dc))
-        u = self.pins.feeder_displacement()
-        self.impulse += 0.5 * (t1 - t0) * (self.f_pin_prev + self.pins.force)
-        self.impulse_u += 0.5 * (t1 - t0) * (self.u_prev + u)
-        self.impulse_time += t1 - t0
-        self.u_prev = u
-        self.f_pin_prev = self.pins.force.copy()
-        return w
 
     def commit(self):
         self.wires.commit()
@@ -574,6 +516,92 @@ class HifiSystem:
 
     def debonded(self) -> int:
         return int(sum(np.sum(t["tie_D"] >= 1.0) for t in self.ties))
+
+
+class HifiSystem(BundleSystem):
+    """The assembled virtual three-point test; the system protocol of :mod:`harnesspipe.fe.dynamics`."""
+
+    def __init__(self, mesh, inp: HifiInputs):
+        super().__init__(mesh, inp)
+        tp = inp.config["three_point"]
+        self.pins = Pins(mesh.rollers["centres"], mesh.rollers["radius"], 2, tp["deflection"], self.T)
+        centre = int(np.argmin(np.hypot(*mesh.wire_yz.T)))
+        mid = mesh.wire_nodes[centre, mesh.wire_nodes.shape[1] // 2]
+        self.free[mid, 0] = self.free[mid, 2] = False    # axial and lateral rigid-body modes
+        self._setup_pin_contacts()
+        self._unbounded = np.full(3, np.inf)         # pins are infinitely long cylinders
+        self.f_pin_prev = np.zeros_like(self.pins.force)
+        self.impulse = np.zeros_like(self.pins.force)
+        self.impulse_u = self.impulse_time = self.u_prev = 0.0
+        self.c_prev = self.pins.centres.copy()
+
+    def _setup_pin_contacts(self):
+        """The wires against the pins as chains; shell nodes in one group per friction
+        coefficient (own penalty from the group's lightest node)."""
+        mesh, itf = self.mesh, self.inp.interface
+        m = self.mass[:, 0]
+        self.wire_pins = self._wire_pin_contact(m)
+        wn = np.arange(self.nw, dtype=np.int64)
+        self.pin_groups = []
+        if not self.has_shells:
+            return
+        for part in (hm.PART_TUBE, hm.PART_FABRIC, hm.PART_TAPE):
+            sel = mesh.shell_part == part
+            if not sel.any():
+                continue
+            nodes = np.unique(self.sconn[sel])
+            r = np.zeros(nodes.size)
+            np.maximum.at(r, np.searchsorted(nodes, self.sconn[sel].ravel()),
+                          np.repeat(0.5 * mesh.shell_thickness[sel], 4))
+            keep = ~np.isin(nodes, wn)
+            nodes, r = nodes[keep], r[keep]
+            mu = itf["mu_rtp"] if part == hm.PART_TAPE else itf["mu_rtb"]
+            self.pin_groups.append(dict(nodes=nodes, r=np.ascontiguousarray(r, dtype=float),
+                                        mu=np.full(nodes.size, float(mu)), k=self._penalty(m[nodes]),
+                                        hist=np.zeros((nodes.size, 3, 3))))
+
+    def _wire_pin_contact(self, m) -> dict:
+        """The wires against the pins as chains (:func:`ce.chain_cylinder_contact`): the
+        segments of each wire run consecutively along it in ``seg``."""
+        body = self.seg_body
+        if np.any(np.diff(body) < 0) or np.any(self.seg[1:, 0][body[1:] == body[:-1]]
+                                                != self.seg[:-1, 1][body[1:] == body[:-1]]):
+            raise ValueError("hi-fi mesh: wire segments must run consecutively along each wire")
+        start = np.searchsorted(body, np.arange(self.mesh.n_wires + 1)).astype(np.int64)
+        return dict(start=start, mu=float(self.inp.interface["mu_rtb"]),
+                    k=self._penalty(m[:self.nw]), hist=np.zeros((self.mesh.n_wires, 3, 3)))
+
+    def _move_loading(self, t):
+        self.c_prev[...] = self.pins.centres
+        self.pins.move_to(t)
+
+    def _loading_forces(self, v, dt, F) -> int:
+        """The pins against the wires (as chains) and the shell nodes (with friction)."""
+        pn, pt = F[3], F[4]
+        p = self.pins
+        p.force[...] = 0.0
+        w = self.wire_pins
+        active = ce.chain_cylinder_contact(self.x, v, self.seg, self.seg_r, w["start"], w["mu"],
+                                            p.centres, p.axes, p.radii, p.velocity, w["k"],
+                                            w["k"], dt, w["hist"], pn, pt, p.force)
+        for g in self.pin_groups:
+            active += ce.node_cylinder_contact(self.x, v, g["nodes"], g["r"], g["mu"], p.centres,
+                                               p.axes, p.radii, self._unbounded, p.velocity,
+                                               g["k"], g["k"], dt, g["hist"], pn, pt, p.force)
+        return active
+
+    def external_work(self, t0, t1) -> float:
+        """Work of the pins on the system: F_on_system = -force on the pin.  Also adds the
+        step's impulse of the pin forces (trapezoidal) for :meth:`observe`."""
+        dc = self.pins.centres - self.c_prev
+        w = -0.5 * float(np.sum((self.f_pin_prev + self.pins.force) * dc))
+        u = self.pins.feeder_displacement()
+        self.impulse += 0.5 * (t1 - t0) * (self.f_pin_prev + self.pins.force)
+        self.impulse_u += 0.5 * (t1 - t0) * (self.u_prev + u)
+        self.impulse_time += t1 - t0
+        self.u_prev = u
+        self.f_pin_prev = self.pins.force.copy()
+        return w
 
     def observe(self, t) -> dict:
         """History row.  ``force_N`` (feeder), ``roller_force_N`` and ``deflection_mm`` are

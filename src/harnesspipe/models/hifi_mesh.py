@@ -148,6 +148,7 @@ class HifiMesh:
     tie_area: np.ndarray          # (n_tie,) tributary area, mm^2
     rollers: dict                 # centres (3, 3) [roller -x, roller +x, feeder], axis, radius
     info: dict = field(default_factory=dict)
+    cut_next: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))  # hoop neighbour of each cut_pairs[:, 0] node
 
     @property
     def n_nodes(self) -> int:
@@ -370,6 +371,7 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
     n_c = int(res["tube_circ"])
     xc = np.linspace(xt0, xt1, n_ax + 1)
     cut_pairs = np.zeros((0, 2), dtype=int)
+    cut_next = np.zeros(0, dtype=int)
     ov_in = ov_out = np.zeros(0, dtype=int)
     ex = np.array([1.0, 0.0, 0.0])
     if cov.kind == "tube":
@@ -381,6 +383,7 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
         base = add(pts, conn, PART_TUBE, GROUP_COVERING, cov.t, ex)
         if cov.cut:
             cut_pairs = np.column_stack([ids[:, 0], ids[:, -1]]) + base
+            cut_next = ids[:, 1] + base
     elif cov.kind == "fabric":
         n_q = max(1, int(round(n_c / 4)))
         n_th = max(2, int(round(4 * cov.wraps)) * n_q)
@@ -528,7 +531,7 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
         shell_thickness=shell_thickness, shell_axis=shell_axis, cut_pairs=cut_pairs,
         fabric_overlap_inner=ov_in, fabric_overlap_outer=ov_out,
         tie_nodes=tie_nodes, tie_target=tie_target, tie_area=node_area[tie_nodes],
-        rollers={}, info=info)
+        rollers={}, info=info, cut_next=cut_next)
 
     # ---- pins, tangent to the outermost surface
     half = 0.5 * span
