@@ -23,6 +23,7 @@ RES = "results"
 PROFILE = hp_config.resolution(config)
 FITS = {}     # stage -> fit.json paths; each stage rule file adds its own
 TARGETS = []  # summary tables; each stage rule file adds its own
+REPORT_EXTRA = []  # further results the report shows (e.g. the hi-fi branch run)
 
 
 include: "workflow/rules/common.smk"

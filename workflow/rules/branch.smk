@@ -97,3 +97,51 @@ rule branch_validate:
 if {"inplane", "outofplane"} <= set(BRANCH_TESTS):
     FITS["branch"] = [f"{RES}/branch/{v}/fit.json" for v in ("inplane", "elastic", "outofplane")]
     TARGETS.append(f"{RES}/branch/damping.csv")
+
+
+# The hi-fi Y harness beside the ROM (Fig. 18a): one explicit run of the mesoscale model with the
+# tensile stage's coverings and the paper's interface values (config branch.hifi).
+BRANCH_HIFI = config["branch"]["hifi"]
+BRANCH_HIFI_CODE = source_hash("fe", "models/hifi.py", "models/hifi_mesh.py", "models/hifi_parts.py",
+                               "models/hifi_branch.py", "models/branch.py", "models/tube_equivalent.py",
+                               "models/tensile.py", "stages/hifi.py", "stages/hifi_chain.py",
+                               "stages/branch_hifi.py", "stages/common.py", "config.py")
+
+
+def branch_hifi_settings():
+    """The part of the config the hi-fi Y harness reads: both CWB cases' hi-fi models (hifi.smk),
+    the branch geometry and test, branch.hifi."""
+    model = hifi_model("cwb38_t2_open_coarse")
+    model["cases"].update(hifi_model("cwb19_t2_open_coarse")["cases"])
+    b = config["branch"]
+    return json.dumps({
+        "model": model, "geometry": b["geometry"], "stroke": b["stroke"], "rate": b["rate"],
+        "load_case": BRANCH_HIFI["load_case"], "t_total": BRANCH_HIFI["t_total"],
+        "resolution": BRANCH_HIFI["resolution"],
+        "interface": {k: v for k, v in config["paper"]["interface"].items() if k != "E2_over_E1"},
+    }, sort_keys=True)
+
+
+rule branch_hifi:
+    """The mesoscale Y harness on the pull test (Fig. 18a): curve, energies, S2 shapes, cost."""
+    input:
+        table2=f"{RES}/tensile/table2.csv",
+        warm=rules.hifi_warmup.output,
+    output:
+        curve=f"{RES}/branch/hifi/curve.csv",
+        summary=f"{RES}/branch/hifi/summary.json",
+        energies=f"{RES}/branch/hifi/energies.csv",
+    log:
+        f"{RES}/logs/branch_hifi.log",
+    params:
+        settings=lambda wc: branch_hifi_settings(),
+        code=BRANCH_HIFI_CODE,
+    threads: 1               # priority 0: the chain's fits, virtual tests and ROM fits (priority 1) go first
+    shell:
+        "NUMBA_NUM_THREADS={threads} {HP} stage branch-hifi --settings '{params.settings}' "
+        "--coverings {input.table2} --outdir {RES}/branch/hifi > {log} 2>&1"
+
+
+if BRANCH_HIFI["in_all"] and "branch" in FITS:
+    TARGETS.append(f"{RES}/branch/hifi/summary.json")
+    REPORT_EXTRA.append(f"{RES}/branch/hifi/summary.json")

@@ -244,6 +244,7 @@ rule hifi_fit:
     wildcard_constraints:
         step="|".join(HIFI_STEPS),
     threads: lambda wc: HIFI_STEPS[wc.step]["cores"]     # see HIFI_STEPS
+    priority: 1              # the chain before the hi-fi branch run (branch.smk) when both are ready
     priority: 10      # the chain is the longest path of the run: its steps go first
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage hifi-fit --step {wildcards.step} --cores {threads} "
@@ -284,6 +285,7 @@ rule hifi_virtual:
     wildcard_constraints:
         case="|".join(sorted(HIFI_CASES)),
     threads: 1
+    priority: 1
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage hifi-run --case {wildcards.case} --role {params.role} "
         "--settings '{params.settings}' --coverings {input.table2} --interface {input.interface} "

@@ -26,6 +26,7 @@ rule report:
         check=f"{RES}/data/check.txt",
         prepared=[f"{RES}/data/{t}.h5" for t in sorted(TESTS)],
         fits=[p for paths in FITS.values() for p in paths],
+        extra=REPORT_EXTRA,
     output:
         report(f"{RES}/report/index.html", caption="../report/index.rst", category="Report"),
     log:

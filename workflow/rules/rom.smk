@@ -50,6 +50,7 @@ rule rom_fit:
                          "stages/common.py",
                          *(["stages/hifi_chain.py"] if config["rom"]["reference"] == "hifi" else [])),
     threads: 1
+    priority: 1
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage rom-fit --case {wildcards.case} --reference {input[0]} "
         "--settings '{params.settings}' --outdir {RES}/rom/{wildcards.case} > {log} 2>&1"

@@ -1,4 +1,5 @@
-"""``harnesspipe hifi three-point``: the high-fidelity virtual bending test (Sec. 4.1)."""
+"""``harnesspipe hifi three-point`` and ``hifi branch``: the high-fidelity virtual bending test
+(Sec. 4.1) and the pull test of the Y-shaped branching harness (Sec. 5, Fig. 18a)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -31,27 +32,64 @@ def register(sub) -> None:
                    help="folder for energies, slip-out, shapes (default: beside --out)")
     p.set_defaults(func=_three_point)
 
+    p = hsub.add_parser("branch", help="explicit pull test of the Y-shaped branching harness (Fig. 18a)")
+    p.add_argument("--load-case", choices=("inplane", "outofplane"), default=None,
+                   help="default: config branch.hifi.load_case")
+    p.add_argument("--t-total", type=float, default=None,
+                   help="simulated seconds of the 50 mm pull (default: config branch.hifi.t_total)")
+    p.add_argument("--profile", default=None, help="resolution profile (config `profiles`)")
+    p.add_argument("--config", type=Path, default=None, help="config file (default: the package's)")
+    p.add_argument("--coverings", type=Path, default=None,
+                   help="table2.csv of the tensile stage (default: config hifi.coverings)")
+    p.add_argument("--threads", type=int, default=None, help="Numba threads (default: all cores)")
+    p.add_argument("--out", type=Path, required=True, help="CSV: displacement_mm,force_N")
+    p.add_argument("--summary", type=Path, required=True, help="summary JSON")
+    p.add_argument("--outdir", type=Path, default=None,
+                   help="folder for energies and S2's bent shapes (default: beside --out)")
+    p.set_defaults(func=_branch)
 
-def _three_point(args) -> int:
+
+def _config(args) -> dict:
+    """The config of a run with --threads and --profile applied (bad values: InputError)."""
+    from harnesspipe.cli import InputError
     from harnesspipe.config import load
-    from harnesspipe.stages.hifi import run_case
-
     if args.threads is not None:
         import numba
-        from harnesspipe.cli import InputError
         if not 1 <= args.threads <= numba.config.NUMBA_NUM_THREADS:
             raise InputError(f"--threads {args.threads}: expected 1..{numba.config.NUMBA_NUM_THREADS}")
         numba.set_num_threads(args.threads)
     cfg = load(args.config) if args.config else load()
     if args.profile is not None:
         if args.profile not in cfg["profiles"]:
-            from harnesspipe.cli import InputError
             raise InputError(f"--profile {args.profile!r}: not one of {sorted(cfg['profiles'])}")
         cfg["profile"] = args.profile
+    return cfg
+
+
+def _three_point(args) -> int:
+    from harnesspipe.stages.hifi import run_case
+
+    cfg = _config(args)
     outdir = args.outdir or args.out.parent / f"{args.out.stem}_files"
     summary = run_case(cfg, args.case, dict(args.overrides), coverings=args.coverings,
                        out_csv=args.out, summary_json=args.summary, outdir=outdir)
     print(f"{args.case}: {summary['steps']} steps, dt {summary['dt']:.3g} s, "
+          f"wall {summary['wall_s']:.1f} s, KE/IE max {summary['ke_ie_max']:.3g}, "
+          f"energy error {summary['energy_error']:.3g}")
+    return 0
+
+
+def _branch(args) -> int:
+    from harnesspipe.stages.branch_hifi import run, settings_from_config
+
+    cfg = _config(args)
+    if args.t_total is not None and not args.t_total > 0:
+        from harnesspipe.cli import InputError
+        raise InputError(f"--t-total {args.t_total}: expected a positive time")
+    outdir = args.outdir or args.out.parent / f"{args.out.stem}_files"
+    summary = run(settings_from_config(cfg, args.load_case, args.t_total), outdir,
+                  table2=args.coverings, curve_csv=args.out, summary_json=args.summary)
+    print(f"branch {summary['load_case']}: {summary['steps']} steps, dt {summary['dt']:.3g} s, "
           f"wall {summary['wall_s']:.1f} s, KE/IE max {summary['ke_ie_max']:.3g}, "
           f"energy error {summary['energy_error']:.3g}")
     return 0

@@ -89,6 +89,12 @@ def register(sub) -> None:
                    help="folder of an earlier run (a fit's best point) taken when it is the same run")
     p.set_defaults(func=_hifi_run)
 
+    p = ssub.add_parser("branch-hifi", help="the hi-fi Y harness on a pull test (Sec. 5, Fig. 18a)")
+    p.add_argument("--settings", type=_settings, required=True)
+    p.add_argument("--coverings", type=Path, default=None, help="table2.csv (default: the paper's Table 2)")
+    p.add_argument("--outdir", type=Path, required=True)
+    p.set_defaults(func=_branch_hifi)
+
     p = ssub.add_parser("hifi-fit", help="one step of the hi-fi interface calibration (Sec. 4.2)")
     p.add_argument("--step", required=True)
     p.add_argument("--settings", type=_settings, required=True)
@@ -189,6 +195,14 @@ def _hifi_run(args) -> int:
                        reuse=args.reuse)
     print(json.dumps({k: summary.get(k) for k in ("case", "role", "wall_s", "steps", "dt", "ke_ie_max",
                                                    "energy_error", "measured", "reused_from")}, indent=2))
+    return 0
+
+
+def _branch_hifi(args) -> int:
+    from harnesspipe.stages.branch_hifi import run
+    summary = run(args.settings, args.outdir, table2=args.coverings)
+    print(json.dumps({k: summary.get(k) for k in ("load_case", "wall_s", "steps", "dt", "ke_ie_max",
+                                                   "energy_error")}, indent=2))
     return 0
 
 

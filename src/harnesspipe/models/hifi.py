@@ -58,7 +58,7 @@ class HifiInputs:
     coverings: dict              # E, sigma_y, K, n per covering (tensile stage)
 
 
-def _shell_materials(mesh, inp: HifiInputs):
+def shell_materials(mesh, inp: HifiInputs):
     """Per-element (mat row, stiffness thickness, density) of the shells (fe/shell_bt layout)."""
     cfg, f_m = inp.config, inp.explicit["f_m"]
     n = mesh.shell_conn.shape[0]
@@ -102,6 +102,7 @@ class BundleSystem:
 
     families = FAMILIES
     driven = "pin_contact"      # the family the prescribed bodies' external work is credited to
+    node_scale_cap = MAX_LIGHT_SCALE    # cap of the nodal mass factor (see _scale_to_wire_step)
 
     def __init__(self, mesh, inp: HifiInputs):
         self.mesh, self.inp = mesh, inp
@@ -124,7 +125,7 @@ class BundleSystem:
         self.has_shells = mesh.shell_conn.shape[0] > 0
         if self.has_shells:
             self.sconn = np.ascontiguousarray(mesh.shell_conn, dtype=np.int64)
-            self.smat, self.sthick, self.srho = _shell_materials(mesh, inp)
+            self.smat, self.sthick, self.srho = self._shell_materials()
             self.sstate = init_shell_state(mesh.X, self.sconn, self.sthick, mesh.shell_axis)
             self.s_el = np.zeros((self.sconn.shape[0], 4, 6))
         self.free = np.ones((n, 6), dtype=np.bool_)
@@ -134,6 +135,7 @@ class BundleSystem:
         self.seg = np.ascontiguousarray(mesh.beam_conn, dtype=np.int64)
         self.seg_r = mesh.wire_radius[mesh.beam_wire].astype(float)
         self.seg_body = mesh.beam_wire.astype(np.int64)
+        self.ww_skip = None         # (n_beam,) bool: segments kept out of wire-wire contact
         self._setup_ties()
         self.shell_mass_scale = self._scale_to_wire_step()
         self.dt0 = 2.0 / np.sqrt(self.node_omega2().max())
@@ -141,6 +143,10 @@ class BundleSystem:
         self.phase = {k: 0.0 for k in ("elements", "contact search", "contact forces", "cohesive")}
         self.pairs_max = 0
         self.active = 0
+
+    def _shell_materials(self):
+        """Per-element (mat row, stiffness thickness, density) of the shells."""
+        return shell_materials(self.mesh, self.inp)
 
     def _loading_forces(self, v, dt, F) -> int:
         """Add the loading's contact forces to ``F``; returns the number of active contacts."""
@@ -163,7 +169,7 @@ class BundleSystem:
         node still faster than that -- a heavier part's node under many ties, a wire node
         under the end tape -- gets the nodal mass factor ``s`` that brings its Gershgorin
         row of M^-1 K there (the whole row scales with 1/s: :attr:`node_scale`).  Factors
-        are capped at ``MAX_LIGHT_SCALE``; the added mass is reported
+        are capped at ``MAX_LIGHT_SCALE`` (the nodal ones at :attr:`node_scale_cap`); the added mass is reported
         (``added_mass_fraction``).  Returns the density factor per shell part.
         """
         self.added_mass_fraction = 0.0
@@ -190,7 +196,7 @@ class BundleSystem:
             shell_lumped_mass(self.mesh.X, self.sconn, self.sthick, self.srho, self.mass)
         w_node = self.node_omega2()
         need = np.flatnonzero(w_node > w_target * (1.0 + 1e-9))
-        self.node_scale[need] = np.minimum(w_node[need] / w_target, MAX_LIGHT_SCALE)
+        self.node_scale[need] = np.minimum(w_node[need] / w_target, self.node_scale_cap)
         self.mass[need] *= self.node_scale[need, None]
         self.added_mass_fraction = float(self.mass[:, 0].sum() / base - 1.0)
         return factor
@@ -416,6 +422,8 @@ class BundleSystem:
         lo, hi = segment_aabbs(x, self.seg, self.seg_r, m)
         cell = float(np.median(np.max(hi - lo, axis=1)))
         self.ww_pairs = box_pairs(lo, hi, lo, hi, cell, True)
+        if self.ww_skip is not None:
+            self.ww_pairs = self.ww_pairs[~np.any(self.ww_skip[self.ww_pairs], axis=1)]
         p = self.ww_pairs
         other = self.seg_body[p[:, 0]] != self.seg_body[p[:, 1]]
         self.ww_hist = ce.fit_slot_history(self.ww_hist, np.min(p[other], axis=1))
@@ -653,8 +661,10 @@ def _slip_out(system) -> pd.DataFrame:
 KE_IE_FROM = 1.0 / 3.0   # KE/IE is checked once the feeder has passed this part of the stroke
 
 
-def quasi_static_ratio(history, stroke: float, start: float = KE_IE_FROM) -> float:
-    """max KE/IE over the history rows past ``start x stroke`` of feeder travel.
+def quasi_static_ratio(history, stroke: float, start: float = KE_IE_FROM,
+                       travel: str = "deflection_mm") -> float:
+    """max KE/IE over the history rows past ``start x stroke`` of feeder travel (column
+    ``travel``: the feeder's deflection, or the crosshead's displacement of the branch test).
 
     The paper's quasi-static criterion (KE/IE < 2 %, Sec. 4.1) cannot hold at the very
     start of any loading from rest: IE grows like the deflection squared while the
@@ -663,7 +673,7 @@ def quasi_static_ratio(history, stroke: float, start: float = KE_IE_FROM) -> flo
     the test that the calibrations use for the hardening and friction response (from a
     third of the stroke); the full history (energies.csv) shows the early ratio too.
     """
-    late = history[history["deflection_mm"] >= start * stroke]
+    late = history[history[travel] >= start * stroke]
     ie = late["internal"].to_numpy()
     ke = late["KE"].to_numpy()
     ok = ie > 0.0

@@ -96,7 +96,7 @@ def _band(ax, prepared):
     ax.plot(prepared.grid, prepared.mean, color="k", lw=1.4, label="measured mean")
 
 
-def hifi_curve_figure(curves: dict, prepared=None, title="", window=None):
+def hifi_curve_figure(curves: dict, prepared=None, title="", window=None, xlabel="deflection [mm]"):
     """Hi-fi force-deflection curves (label -> DataFrame deflection_mm/displacement_mm, force_N)
     over the measured band when there is a test."""
     fig, ax = plt.subplots(figsize=(5.2, 3.6), dpi=110)
@@ -108,7 +108,7 @@ def hifi_curve_figure(curves: dict, prepared=None, title="", window=None):
         ax.plot(x, c["force_N"], lw=1.6, ls=styles[k % len(styles)], label=label)
     if window is not None:
         ax.axvspan(window[0], window[1], color="tab:orange", alpha=0.08, label="fitted window")
-    ax.set_xlabel("deflection [mm]")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("force [N]")
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3)
@@ -160,12 +160,14 @@ ENERGY_COLUMNS = (("KE", "kinetic"), ("internal", "internal"), ("friction", "fri
 def energies_figure(history, title=""):
     """Energy families of a hi-fi run against the feeder deflection (or time)."""
     fig, ax = plt.subplots(figsize=(5.2, 3.6), dpi=110)
-    x = history["deflection_mm"] if "deflection_mm" in history else history["time_s"]
+    xcol = next((c for c in ("deflection_mm", "displacement_mm") if c in history), "time_s")
+    x = history[xcol]
     for col, label in ENERGY_COLUMNS:
         if col in history and (col in ("KE", "internal", "W_ext") or np.any(np.abs(history[col]) > 0)):
             ax.plot(x, history[col], lw=1.8 if col == "W_ext" else 1.2,
                     ls="--" if col == "W_ext" else "-", label=label)
-    ax.set_xlabel("deflection [mm]" if "deflection_mm" in history else "time [s]")
+    ax.set_xlabel({"deflection_mm": "deflection [mm]", "displacement_mm": "crosshead displacement [mm]",
+                   "time_s": "time [s]"}[xcol])
     ax.set_ylabel("energy [N mm]")
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3)

@@ -42,10 +42,12 @@ def with_fitted_properties(settings: dict, fits: dict[str, Path]) -> dict:
 
 
 def _write(outdir: Path, item: str, ref, alpha: float, settings: dict, load_case: str,
-           nfev: int, converged: bool, wall_s: float, extra: dict) -> dict:
-    """Curve and shapes of the model at ``alpha`` against the prepared test ``ref``."""
+           nfev: int, converged: bool, t0: float, extra: dict) -> dict:
+    """Curve and shapes of the model at ``alpha`` against the prepared test ``ref``; the wall
+    time is from ``t0`` (perf_counter) to the end of this run."""
     curve, shapes = branch.simulate(load_case, alpha, return_shapes=True, shape_at=SHAPES_AT,
                                     **model_options(settings))
+    wall_s = time.perf_counter() - t0
     if load_case == "outofplane":  # markers record the out-of-plane coordinate as y
         shapes = {d: xyz[:, [0, 2, 1]] for d, xyz in shapes.items()}
     write_shapes(outdir, shapes)
@@ -68,7 +70,7 @@ def calibrate(reference: Path, settings: dict, outdir: Path, damping_csv: Path) 
                     xatol=settings["alpha_xatol"], load_case="inplane", log_path=Path(outdir) / "trace.h5",
                     key=objective_key(ref.grid, ref.mean, settings), **model_options(settings))
     fit = _write(Path(outdir), "in-plane pull: alpha calibrated", ref, res["alpha"], settings, "inplane",
-                 res["nfev"], True, time.perf_counter() - t0, {"role": "calibration"})
+                 res["nfev"], True, t0, {"role": "calibration"})
     write_csv(damping_csv, pd.DataFrame({"parameter": ["alpha"], "value": [res["alpha"]]}))
     return fit
 
@@ -78,8 +80,7 @@ def predict(reference: Path, settings: dict, outdir: Path, load_case: str, alpha
     """The model at a given alpha against a test, with no refit."""
     ref = read_prepared(reference)
     t0 = time.perf_counter()
-    return _write(Path(outdir), item, ref, alpha, settings, load_case, 1, True,
-                  time.perf_counter() - t0, {"role": role})
+    return _write(Path(outdir), item, ref, alpha, settings, load_case, 1, True, t0, {"role": role})
 
 
 def read_alpha(damping_csv: Path) -> float:
