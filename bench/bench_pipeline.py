@@ -60,7 +60,7 @@ def jobs_of(log: str) -> list[dict]:
 
 
 def hifi_runs(results: Path) -> list[str]:
-    """One line per hi-fi stage: runs made and their summed wall time."""
+    """One line per hi-fi stage (and the hi-fi branch run): runs made and their wall time."""
     lines = []
     for fit in sorted((results / "hifi" / "chain").glob("*/fit.json")):
         f = json.loads(fit.read_text())
@@ -71,6 +71,11 @@ def hifi_runs(results: Path) -> list[str]:
         s = json.loads(summary.read_text())
         how = "the fit's run, reused" if s.get("reused_from") else f"{s['wall_s']:.0f} s, {s['steps']} steps"
         lines.append(f"- virtual test {s['case']}: {how}")
+    branch = results / "branch" / "hifi" / "summary.json"
+    if branch.exists():
+        s = json.loads(branch.read_text())
+        lines.append(f"- hi-fi Y harness ({s['load_case']}): {s['wall_s']:.0f} s, {s['steps']} steps, "
+                     f"KE/IE {s['ke_ie_max']:.3g}")
     return lines
 
 

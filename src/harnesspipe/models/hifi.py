@@ -155,7 +155,6 @@ class BundleSystem:
     def _move_loading(self, t) -> None:
         raise NotImplementedError
 
-
     # -- set-up -----------------------------------------------------------------
     def _scale_to_wire_step(self) -> dict:
         """Selective mass scaling (on top of the uniform f_m) to the wires' element step.
@@ -169,8 +168,9 @@ class BundleSystem:
         node still faster than that -- a heavier part's node under many ties, a wire node
         under the end tape -- gets the nodal mass factor ``s`` that brings its Gershgorin
         row of M^-1 K there (the whole row scales with 1/s: :attr:`node_scale`).  Factors
-        are capped at ``MAX_LIGHT_SCALE`` (the nodal ones at :attr:`node_scale_cap`); the added mass is reported
-        (``added_mass_fraction``).  Returns the density factor per shell part.
+        are capped at ``MAX_LIGHT_SCALE`` (the nodal ones at :attr:`node_scale_cap`); the
+        added mass is reported (``added_mass_fraction``).  Returns the density factor per
+        shell part.
         """
         self.added_mass_fraction = 0.0
         self.node_scale = np.ones(self.mesh.n_nodes)
