@@ -244,8 +244,7 @@ rule hifi_fit:
     wildcard_constraints:
         step="|".join(HIFI_STEPS),
     threads: lambda wc: HIFI_STEPS[wc.step]["cores"]     # see HIFI_STEPS
-    priority: 1              # the chain before the hi-fi branch run (branch.smk) when both are ready
-    priority: 10      # the chain is the longest path of the run: its steps go first
+    priority: 10      # the chain is the longest path of the run: its steps go first (virtual tests 1, branch_hifi 0)
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage hifi-fit --step {wildcards.step} --cores {threads} "
         "--settings '{params.settings}' --reference {params.refs} --coverings {input.table2} "
