@@ -107,7 +107,10 @@ def main() -> None:
     rows = [f"| {j['rule']} | {j['wildcards']} | {j['threads']} | "
             f"{(j['start'] - start).total_seconds() / 60:.1f} | {(j['end'] - start).total_seconds() / 60:.1f} |"
             for j in sorted(jobs, key=lambda j: (j["start"], j["end"])) if (j["end"] - j["start"]).seconds >= 20]
+    heading = f"## Pipeline ({args.profile})"
     text = "\n".join([
+        heading,
+        "",
         f"`bench/bench_pipeline.py --profile {args.profile}`, {dt.date.today()}, {platform.machine()}, "
         f"{args.cores} cores, fresh copy of the project (no results), Numba cache "
         f"{'from HARNESSPIPE_NUMBA_CACHE' if 'HARNESSPIPE_NUMBA_CACHE' in os.environ else 'of the user'}.",
@@ -125,7 +128,7 @@ def main() -> None:
         "|---|---|---|---|---|",
         *rows,
     ])
-    write_section(f"## Pipeline ({args.profile})", text)
+    write_section(heading, text)
     print(text)
 
 
