@@ -43,7 +43,7 @@ def test_parallel_forces_equal_assembled_beams_per_body():
     half = n_el // 2
     sec_id = np.repeat([0, 1], half).astype(np.int64)
     ng, nf = xi.size, secs[0][0].size
-    hist = [np.zeros((n_el, ng, nf)) for _ in range(6)]   # committed and trial eps_p, alpha, alpha^n
+    hist = [np.zeros((n_el, ng, nf)) for _ in range(3)]   # eps_p, alpha, alpha^n (in place)
     f_el = np.zeros((n_el, 12))
     f_int = np.zeros((X.shape[0], 6))
     sec = [np.ascontiguousarray(np.stack([s[k] for s in secs])) for k in range(3)]
@@ -60,11 +60,11 @@ def test_parallel_forces_equal_assembled_beams_per_body():
         nodes = np.unique(conn[sl])
         np.testing.assert_allclose(f_int[nodes].ravel(), f.reshape(-1, 6)[nodes].ravel(),
                                    rtol=1e-12, atol=1e-10)
-        np.testing.assert_array_equal(hist[4][sl], h[3])        # trial alpha
-        np.testing.assert_allclose(hist[5][sl], h[3] ** mats[body, 3], rtol=1e-13)   # alpha^n
+        np.testing.assert_array_equal(hist[1][sl], h[3])        # new alpha
+        np.testing.assert_allclose(hist[2][sl], h[3] ** mats[body, 3], rtol=1e-13)   # alpha^n
     assert np.abs(f_int).max() > 1.0            # the state is strained (yielded)
-    assert hist[4].max() > 0.0
-    W = beam_plastic_work(conn, X, w, sec[2], sec_id, mats, sec_id, hist[4])
+    assert hist[1].max() > 0.0
+    W = beam_plastic_work(conn, X, w, sec[2], sec_id, mats, sec_id, hist[1])
     assert W > 0.0
 
 
@@ -88,7 +88,7 @@ def test_lumped_mass_total_and_stable_step_bounds_a_free_vibration():
         mats = np.array([[E, 1e9, 0.0, 1.0]])
         ids = np.zeros(n_el, dtype=np.int64)
         R0 = initial_frames(X, conn)
-        hist = [np.zeros((n_el, 3, y.size)) for _ in range(6)]
+        hist = [np.zeros((n_el, 3, y.size)) for _ in range(3)]
         x = X.copy()
         quat = np.zeros((X.shape[0], 4))
         quat[:, 0] = 1.0
@@ -165,11 +165,15 @@ def test_lean_forces_equal_element_response_at_large_rotations_with_yielding(see
     sa_c = alpha_c ** mats[mat_id, 3][:, None, None]           # the flow-stress history
     out = []
     for fun, nch in ((beam_forces, 2), (beam_forces_reference, 2), (beam_forces, 1)):
-        h = [np.zeros((n_el, ng, nf)) for _ in range(3)]
         f_el = np.zeros((n_el, 12))
         f = np.zeros((X.shape[0], 6))
-        fun(X, conn, R0, x, quat, xi, w, *sec, GJ, sec_id, mats, mat_id, eps_p_c, alpha_c, sa_c,
-            *h, f_el, f, nch)
+        if fun is beam_forces:                      # the committed history, advanced in place
+            h = [eps_p_c.copy(), alpha_c.copy(), sa_c.copy()]
+            fun(X, conn, R0, x, quat, xi, w, *sec, GJ, sec_id, mats, mat_id, *h, f_el, f, nch)
+        else:                                       # committed read, trial written
+            h = [np.zeros((n_el, ng, nf)) for _ in range(3)]
+            fun(X, conn, R0, x, quat, xi, w, *sec, GJ, sec_id, mats, mat_id, eps_p_c, alpha_c,
+                sa_c, *h, f_el, f, nch)
         out.append((f_el, f, h))
     (fe, f, h), (fe_r, f_r, h_r), (fe_1, f_1, h_1) = out
     scale = np.abs(fe_r).max(axis=1, keepdims=True)

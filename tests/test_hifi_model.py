@@ -59,9 +59,6 @@ class PinnedWire:
     def external_work(self, t0, t1):
         return 0.0                              # the load is a family: its work is W[load]
 
-    def commit(self):
-        self.w.commit()
-
     def displacement_max(self):
         return float(np.abs(self.x - self.X).max())
 
@@ -111,9 +108,6 @@ class SpringMass:
 
     def external_work(self, t0, t1):
         return 0.0
-
-    def commit(self):
-        pass
 
     def displacement_max(self):
         return float(np.abs(self.u).max())

@@ -41,8 +41,8 @@ PARALLEL_MIN_EL = 64   # fewer elements per thread than this: one chunk (thread 
 
 
 @njit(cache=True)
-def _section_force(e0, kappa_y, kappa_z, y, z, area, eps_p_c, alpha_c, sa_c, eps_p_t, alpha_t,
-                   sa_t, e, g, E, sigma_y, K, n):
+def _section_force(e0, kappa_y, kappa_z, y, z, area, eps_p, alpha, sa_h, e, g, E, sigma_y, K,
+                   n):
     """Stress resultants ``(N, M_y, M_z)`` of the fibre section, no tangent.
 
     The fibre strain, eq. 2 return and summation order of
@@ -50,28 +50,26 @@ def _section_force(e0, kappa_y, kappa_z, y, z, area, eps_p_c, alpha_c, sa_c, eps
     and each fibre keeps ``sa = alpha**n`` in its history, so its flow stress
     ``sigma_Y + K sa`` (the elastic check) and the return map's start need no power
     (:func:`harnesspipe.fe.hardening.return_map_from`): the same results up to round-off.
-    History of element ``e``, Gauss point ``g``: committed ``eps_p_c, alpha_c, sa_c`` read,
-    trial ``eps_p_t, alpha_t, sa_t`` written (indexed in place).
+    History of element ``e``, Gauss point ``g``: ``eps_p, alpha, sa_h`` read and, for a
+    fibre that yields, updated in place (an explicit step is never rejected, so there is
+    no trial state; an elastic fibre's history is only read).
     """
     s0 = s1 = s2 = 0.0
     for f in range(y.shape[0]):
         yf = y[f]
         zf = z[f]
-        ep = eps_p_c[e, g, f]
-        al = alpha_c[e, g, f]
-        sa = sa_c[e, g, f]
+        ep = eps_p[e, g, f]
+        sa = sa_h[e, g, f]
         sig = E * (e0 + zf * kappa_y - yf * kappa_z - ep)
         if abs(sig) > sigma_y + K * sa:         # beyond the flow stress: eq. 2 return
+            al = alpha[e, g, f]
             dg, _, sa_new = return_map_from(abs(sig), E, al, sa, sigma_y, K, n)
             if dg > 0.0:
                 dgs = dg if sig >= 0.0 else -dg
                 sig -= E * dgs
-                ep += dgs
-                al += dg
-                sa = sa_new
-        eps_p_t[e, g, f] = ep
-        alpha_t[e, g, f] = al
-        sa_t[e, g, f] = sa
+                eps_p[e, g, f] = ep + dgs
+                alpha[e, g, f] = al + dg
+                sa_h[e, g, f] = sa_new
         fa = sig * area[f]                      # the fibre's axial force
         s0 += fa
         s1 += fa * zf
@@ -93,13 +91,13 @@ def _ts_inv_t_apply(th, m0, m1, m2):
 
 @njit(cache=True)
 def element_force(e, a, b, X0, x, R0, Rg, ia, ib, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n,
-                  eps_p_c, alpha_c, sa_c, eps_p_t, alpha_t, sa_t, f_el, W, Rbar, th1, th2, v4):
+                  eps_p, alpha, sa_h, f_el, W, Rbar, th1, th2, v4):
     """Global internal force ``f_el[e]`` (12) of element ``e`` (nodes ``a, b``), lean path.
 
     Equals ``element_response(..., want_tangent=False)`` of :mod:`harnesspipe.fe.beam`;
     ``Rg[ia]``, ``Rg[ib]`` hold the nodal rotation matrices (quat_to_matrix of
     ``quat[a]``, ``quat[b]``).  The co-rotated frame, the local rotations, the fibre
-    resultants and the trial history use the arithmetic of element_response
+    resultants and the new history use the arithmetic of element_response
     (bit-identical); only the final mapping differs in round-off, because only what the
     force needs is formed:
 
@@ -176,8 +174,8 @@ def element_force(e, a, b, X0, x, R0, Rg, ia, ib, xi_g, w_g, y, z, area, GJ, E, 
         b2 = (6.0 * xi - 2.0) / l0
         ky = b1 * th1[1] + b2 * th2[1]
         kz = b1 * th1[2] + b2 * th2[2]
-        s0, s1, s2 = _section_force(e0, ky, kz, y, z, area, eps_p_c, alpha_c, sa_c, eps_p_t,
-                                    alpha_t, sa_t, e, g, E, sigma_y, K, n)
+        s0, s1, s2 = _section_force(e0, ky, kz, y, z, area, eps_p, alpha, sa_h, e, g, E,
+                                    sigma_y, K, n)
         wl = w_g[g] * l0
         f0 += (wl * inv_l0) * s0
         f2 += (wl * b1) * s1
@@ -240,16 +238,16 @@ def _quat_to_matrix_at(quat, a, Rg, i):
 
 @njit(cache=True, parallel=True)
 def beam_forces(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area, sec_GJ, sec_id,
-                mats, mat_id, eps_p_c, alpha_c, sa_c, eps_p_t, alpha_t, sa_t, f_el, f_int,
-                n_chunks):
+                mats, mat_id, eps_p, alpha, sa_h, f_el, f_int, n_chunks):
     """Add the internal (resisting) forces of all beam elements into ``f_int`` (n_nodes, 6).
 
     ``X0``/``x`` (n_nodes, 3) reference and current positions, ``quat`` (n_nodes, 4) nodal
     rotations, ``conn`` (n_el, 2) global node ids, ``R0`` (n_el, 3, 3) initial frames;
     ``sec_y, sec_z, sec_area`` (n_sec, n_fib) fibre data, ``sec_GJ`` (n_sec,);
-    ``mats`` (n_mat, 4) rows (E, sigma_y, K, n); history (n_el, n_gauss, n_fib): committed
-    ``eps_p_c, alpha_c, sa_c`` (``sa = alpha**n``) are read, trial ``eps_p_t, alpha_t, sa_t``
-    written; ``f_el`` (n_el, 12) scratch; ``n_chunks`` the number of parallel chunks
+    ``mats`` (n_mat, 4) rows (E, sigma_y, K, n); history (n_el, n_gauss, n_fib)
+    ``eps_p, alpha, sa_h`` (``sa_h = alpha**n``), updated in place where a fibre yields
+    (explicit steps are never rejected: every call advances the history); ``f_el``
+    (n_el, 12) scratch; ``n_chunks`` the number of parallel chunks
     (``numba.get_num_threads()``).
 
     Lean force-only path (:func:`element_force`).  Each chunk takes a contiguous range
@@ -282,8 +280,7 @@ def beam_forces(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area, sec_GJ
             last = b
             element_force(e, a, b, X0, x, R0, Rg, ia, 1 - ia, xi_g, w_g, sec_y[k], sec_z[k],
                           sec_area[k], sec_GJ[k], mats[m, 0], mats[m, 1], mats[m, 2], mats[m, 3],
-                          eps_p_c, alpha_c, sa_c, eps_p_t, alpha_t, sa_t, f_el, W, Rbar, th1,
-                          th2, v4)
+                          eps_p, alpha, sa_h, f_el, W, Rbar, th1, th2, v4)
     for e in range(n_el):
         a = conn[e, 0]
         b = conn[e, 1]

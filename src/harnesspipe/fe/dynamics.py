@@ -22,12 +22,13 @@ exceeds its bound; it then returns nothing.
 System protocol (duck-typed; see :class:`harnesspipe.models.hifi.HifiSystem`)::
 
     mass (n, 6), free (n, 6) bool, families: tuple of names
-    forces(t, v_half, dt) -> (P, n, 6) array (ON the nodes), in ``families`` order
+    forces(t, v_half, dt) -> (P, n, 6) array (ON the nodes), in ``families`` order; it
+        advances every history (plastic fibres, friction, cohesive damage) in place: it
+        is called once per step and an explicit step is never rejected
     advance(du, t) -> None  (moves nodes by du (n, 6) and the rigid bodies to time t)
     external_work(t_old, t_new) -> work of the prescribed bodies on the system over the step
     driven (optional) -> name of the family the prescribed bodies act through
     displacement_max() -> largest nodal displacement (mm)
-    commit() -> None (history of materials, contact, cohesive)
     stable_step() -> float (critical step of the current configuration)
     observe(t) -> dict of scalars for the history
 """
@@ -138,7 +139,6 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
     dt = settings.safety * system.stable_step()
     F = system.forces(0.0, v, dt).copy()
     f = F.sum(axis=0)                   # total force on the nodes
-    system.commit()
     w_ext = 0.0
     ke_ie = bal_max = 0.0
     t = 0.0
@@ -159,7 +159,6 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
         system.advance(du, t_new)
         ke = close_step(F, system.forces(t_new, v, h), du, W, v, minv, free, 0.5 * h, m, f)
         w_ext += system.external_work(t, t_new)
-        system.commit()
         t = t_new
         absorbed = -W
         if i_drv is not None:

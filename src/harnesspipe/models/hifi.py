@@ -505,9 +505,6 @@ class BundleSystem:
                                       self.delta0, itf["delta_f"], itf["alpha_d"],
                                       ties["tie_kappa"], ties["tie_D"], ties["tie_energy"], fc)
 
-    def commit(self):
-        self.wires.commit()
-
     def displacement_max(self) -> float:
         return float(np.max(np.abs(self.x - self.mesh.X)))
 

@@ -39,8 +39,7 @@ class Wires:
         self.mats = np.array([[t["E"], t["sigma_y"], t["K"], t["n"]] for t in types])
         self.rho = np.array([f_m * t["rho"] for t in types])
         n_el, ng, nf = self.conn.shape[0], self.xi_g.size, self.sec_y.shape[1]
-        self.hist = np.zeros((3, n_el, ng, nf))      # eps_p, alpha, alpha**n per fibre
-        self.trial = np.zeros_like(self.hist)
+        self.hist = np.zeros((3, n_el, ng, nf))      # eps_p, alpha, alpha**n per fibre (in place)
         self.f_el = np.zeros((n_el, 12))
         self.nodes = np.unique(self.conn)
         self._f = np.zeros((int(self.conn.max()) + 1, 6))
@@ -72,11 +71,8 @@ class Wires:
         f[...] = 0.0
         beam_forces(self.X0, self.conn, self.R0, x, quat, self.xi_g, self.w_g, self.sec_y,
                     self.sec_z, self.sec_area, self.sec_GJ, self.sec_id, self.mats, self.sec_id,
-                    *self.hist, *self.trial, self.f_el, f, numba.get_num_threads())
+                    *self.hist, self.f_el, f, numba.get_num_threads())
         f_internal[:f.shape[0]] -= f
-
-    def commit(self):
-        self.hist, self.trial = self.trial, self.hist
 
     def plastic_work(self):
         return beam_plastic_work(self.conn, self.X0, self.w_g, self.sec_area, self.sec_id,
