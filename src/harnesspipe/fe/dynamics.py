@@ -60,28 +60,36 @@ def half_kick(v, f, minv, free, hdt):
 def close_step(F, F_new, du, W, v, minv, free, hdt, m, f):
     """The end of a step: every family's work ``W[p] += 1/2 (F_p + F_new_p) . du``,
     ``F <- F_new``, the total force ``f = sum_p F_new_p`` and the closing half kick
-    ``v += hdt M^-1 f``; returns the kinetic energy ``1/2 v . M v``.  Family by family
-    over contiguous rows with the work summed in a register (the families are the
-    integrator's largest arrays: this pass is memory bound)."""
+    ``v += hdt M^-1 f``; returns the kinetic energy ``1/2 v . M v``.  One pass over the
+    dofs, all families of a dof together (the families are the integrator's largest
+    arrays: this pass is memory bound)."""
     P, n, k = F.shape
     Fp = F.reshape(P, n * k)
     Fq = F_new.reshape(P, n * k)
     d = du.reshape(n * k)
     tot = f.reshape(n * k)
-    tot[:] = 0.0
-    for p in range(P):
-        w = 0.0
-        for q in range(n * k):
-            fn = Fq[p, q]
-            w += (Fp[p, q] + fn) * d[q]
-            Fp[p, q] = fn
-            tot[q] += fn
-        W[p] += 0.5 * w
-    half_kick(v, f, minv, free, hdt)
+    vv = v.reshape(n * k)
+    mi = minv.reshape(n * k)
+    mm = m.reshape(n * k)
+    fr = free.reshape(n * k)
+    w = np.zeros(P)
     ke = 0.0
-    for i in range(n):
-        for j in range(k):
-            ke += m[i, j] * v[i, j] * v[i, j]
+    for q in range(n * k):
+        dq = d[q]
+        s = 0.0
+        for p in range(P):
+            fn = Fq[p, q]
+            w[p] += (Fp[p, q] + fn) * dq
+            Fp[p, q] = fn
+            s += fn
+        tot[q] = s
+        if fr[q]:
+            vv[q] += hdt * s * mi[q]
+        else:
+            vv[q] = 0.0
+        ke += mm[q] * vv[q] * vv[q]
+    for p in range(P):
+        W[p] += 0.5 * w[p]
     return 0.5 * ke
 
 

@@ -250,6 +250,27 @@ def rotate_nodes(quat, dw):
 
 
 @njit(cache=True)
+def move_nodes(x, quat, du, n_rot):
+    """One explicit drift of the nodes: ``x += du[:, :3]`` for every node (x (n, 3)),
+    and the spatial spins ``du[:n_rot, 3:]`` applied to ``quat[:n_rot]`` as
+    :func:`rotate_nodes` does (same arithmetic, no per-node views)."""
+    for i in range(x.shape[0]):
+        for k in range(3):
+            x[i, k] += du[i, k]
+    w = np.empty(3)
+    q = np.empty(4)
+    work4 = np.empty(4)
+    for i in range(n_rot):
+        for k in range(3):
+            w[k] = du[i, 3 + k]
+        for k in range(4):
+            q[k] = quat[i, k]
+        rotate_spatial(q, w, work4)
+        for k in range(4):
+            quat[i, k] = q[k]
+
+
+@njit(cache=True)
 def in_plane_angle(q):
     """Angle of the rotated x axis about z, atan2(R10, R00) (planar problems)."""
     r00 = q[0] * q[0] + q[1] * q[1] - q[2] * q[2] - q[3] * q[3]

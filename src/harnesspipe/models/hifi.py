@@ -32,7 +32,7 @@ import pandas as pd
 from harnesspipe.fe import contact_explicit as ce
 from harnesspipe.fe.dynamics import DynamicsSettings, integrate
 from harnesspipe.fe.plane_stress import fabric_shear_modulus
-from harnesspipe.fe.rotation import rotate_nodes
+from harnesspipe.fe.rotation import move_nodes
 from harnesspipe.fe.shell_bt import (init_shell_state, shell_energies, shell_forces,
                                      shell_lumped_mass)
 from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, node_aabbs, quad_aabbs,
@@ -410,8 +410,7 @@ class BundleSystem:
         return area / diag / np.sqrt(c2)
 
     def advance(self, du, t):
-        self.x += du[:, :3]
-        rotate_nodes(self.quat[:self.nw], np.ascontiguousarray(du[:self.nw, 3:]))
+        move_nodes(self.x, self.quat, du, self.nw)
         self._move_loading(t)
 
     def _search(self):
@@ -462,11 +461,10 @@ class BundleSystem:
         return F
 
     def _element_forces(self, v, dt, fi):
-        s = self._scratch
-        s[...] = 0.0
-        self.wires.add_forces(self.x, self.quat, s)          # s = -f_int of the beams
-        fi += s
+        """Element forces ON the nodes into ``fi`` (zeroed by the caller)."""
+        self.wires.add_forces(self.x, self.quat, fi)         # -f_int of the beams
         if self.has_shells:
+            s = self._scratch
             s[...] = 0.0
             shell_forces(self.x, v, self.sconn, self.sthick, self.smat, self.sstate, dt,
                          self.s_el, s)
