@@ -3,14 +3,15 @@ import math
 
 import numpy as np
 import pytest
+from scipy.optimize import minimize
 
 from harnesspipe.fe.cohesive import cohesive_dissipated_energy
 from harnesspipe.fe.contact_explicit import (
     beam_beam_contact, cohesive_tie_dissipation, cohesive_ties_quad,
     WW_POINTS, chain_cylinder_contact, fit_slot_history, make_ties, new_slot_history, node_cylinder_contact,
-    node_facet_contact)
-from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, node_aabbs, quad_aabbs,
-                                         segment_aabbs)
+    near_node_facet_pairs, node_facet_contact)
+from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
+                                         quad_aabbs, segment_aabbs, segment_distance)
 
 R_W = 0.65
 
@@ -69,6 +70,27 @@ def test_skin_search_keeps_every_touching_pair():
     touching = {(i, j) for i in range(n) for j in range(i + 1, n)
                 if _segment_distance(x1[i], x1[n + i], x1[j], x1[n + j]) < 2 * r}
     assert len(touching) > 20 and touching <= found
+    # narrowed on the true distance (r_a + r_b + m): still every touching pair, fewer pairs
+    p = np.array(sorted(found), dtype=np.int64)
+    near = {tuple(q) for q in p[near_segment_pairs(x, seg, radii, p, m)]}
+    assert touching <= near and len(near) < 0.8 * len(found)
+
+
+def test_segment_distance_matches_sampling():
+    rng = np.random.default_rng(5)
+    for case in range(300):
+        x = rng.normal(size=(4, 3))
+        if case % 3 == 1:                        # parallel, overlapping or not
+            x[3] = x[2] + rng.uniform(-2, 2) * (x[1] - x[0])
+        if case % 3 == 2:                        # a point segment
+            x[1] = x[0]
+        # the squared distance is a convex quadratic in (s, u) on the unit square
+        fun = lambda su: float(np.sum((x[0] + su[0] * (x[1] - x[0]) - x[2] - su[1] * (x[3] - x[2])) ** 2))
+        ref = minimize(fun, [0.5, 0.5], bounds=[(0, 1), (0, 1)], method="L-BFGS-B",
+                       options={"ftol": 1e-15, "gtol": 1e-12})
+        d = segment_distance(x, 0, 1, 2, 3)
+        assert d**2 <= ref.fun + 1e-12 and d == pytest.approx(np.sqrt(ref.fun), abs=1e-6)
+        assert d <= _segment_distance(x[0], x[1], x[2], x[3]) + 1e-12
 
 
 def test_aabb_helpers():
@@ -637,8 +659,10 @@ def test_damaged_ties_are_conservative_when_closing_differs_from_opening():
 
 # ------------------------------------------------------------- early rejects (candidates)
 def test_far_candidates_change_nothing():
-    """All-pairs candidate lists (mostly far apart: rejected early) give the same forces and
-    history as the tight box_pairs lists, step after step, for wire-wire and node-facet."""
+    """All-pairs candidate lists (mostly far apart: rejected early) and skin lists (searched
+    with a margin m, narrowed by near_segment_pairs / near_node_facet_pairs and kept until a
+    node has moved m / 2) give the same forces and history as the tight box_pairs lists of
+    every step, step after step, for wire-wire and node-facet."""
     rng = np.random.default_rng(7)
     n_w, n_s = 6, 8
     xs = np.linspace(0.0, 8.0, n_s + 1)
@@ -658,24 +682,37 @@ def test_far_candidates_change_nothing():
     sign = np.ones(len(quads))
     all_ww = np.array([[a, b] for a in range(len(seg)) for b in range(a + 1, len(seg))])
     all_nf = np.array([[i, q] for i in range(len(nodes)) for q in range(len(quads))])
-    runs = []
-    for tight in (True, False):
+    m_skin = 0.3
+    runs, searches = [], 0
+    for mode in ("tight", "all", "skin"):
         x = x0.copy()
         hw = new_slot_history(len(seg), 8, points=WW_POINTS)
         hf = new_slot_history(len(nodes), 8)
         rng = np.random.default_rng(1)
         out = []
+        x_search = None
         for step in range(12):
             v = np.zeros((len(x), 6))
             v[:len(xw), :3] = rng.normal(scale=20.0, size=(len(xw), 3))
             v[:len(xw), 2] -= 30.0                 # press the wires onto each other and the plate
             x[:, :3] += 1e-3 * v[:, :3]
-            if tight:
+            if mode == "tight":
                 lo, hi = segment_aabbs(x, seg, np.full(len(seg), R_W), 0.5)
                 pw = box_pairs(lo, hi, lo, hi, 2.0, True)
                 lo_n, hi_n = node_aabbs(x, nodes, r, 0.5)
                 lo_q, hi_q = quad_aabbs(x, quads, 0.5 * t, 0.5)
                 pf = box_pairs(lo_n, hi_n, lo_q, hi_q, 2.0, False)
+            elif mode == "skin":
+                if x_search is None or max_drift2(x, x_search) > (0.5 * m_skin) ** 2:
+                    x_search, searches = x.copy(), searches + 1
+                    rw = np.full(len(seg), R_W)
+                    lo, hi = segment_aabbs(x, seg, rw, m_skin)
+                    pw = box_pairs(lo, hi, lo, hi, 2.0, True)
+                    pw = pw[near_segment_pairs(x, seg, rw, pw, m_skin)]
+                    lo_n, hi_n = node_aabbs(x, nodes, r, m_skin)
+                    lo_q, hi_q = quad_aabbs(x, quads, 0.5 * t, m_skin)
+                    pf = box_pairs(lo_n, hi_n, lo_q, hi_q, 2.0, False)
+                    pf = pf[near_node_facet_pairs(x, nodes, r, quads, t, pf, 1.0, m_skin)]
             else:
                 pw, pf = all_ww, all_nf
             fn, ft = _z(len(x)), _z(len(x))
@@ -685,11 +722,13 @@ def test_far_candidates_change_nothing():
                                     2.0, 1e-3, 1.0, 1.0, hf[0], hf[1], fn, ft)
             out.append((n1, n2, fn.copy(), ft.copy()))
         runs.append((out, hw, hf))
-    (o1, hw1, hf1), (o2, hw2, hf2) = runs
-    assert sum(o[0] for o in o1) > 10 and sum(o[1] for o in o1) > 10    # contacts happen
-    for a, b in zip(o1, o2):
-        assert a[0] == b[0] and a[1] == b[1]
-        np.testing.assert_allclose(a[2], b[2], rtol=0, atol=1e-12)
-        np.testing.assert_allclose(a[3], b[3], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(hf1[1], hf2[1], rtol=0, atol=1e-12)
-    np.testing.assert_array_equal(hf1[0], hf2[0])
+    assert 2 < searches < 12                  # the skin lists are reused between searches
+    (o1, hw1, hf1) = runs[0]
+    for o2, hw2, hf2 in runs[1:]:
+        assert sum(o[0] for o in o1) > 10 and sum(o[1] for o in o1) > 10    # contacts happen
+        for a, b in zip(o1, o2):
+            assert a[0] == b[0] and a[1] == b[1]
+            np.testing.assert_allclose(a[2], b[2], rtol=0, atol=1e-12)
+            np.testing.assert_allclose(a[3], b[3], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(hf1[1], hf2[1], rtol=0, atol=1e-12)
+        np.testing.assert_array_equal(hf1[0], hf2[0])

@@ -56,7 +56,8 @@ from numba import njit, prange
 from harnesspipe.fe.cohesive import cohesive_dissipated_energy, cohesive_traction
 from harnesspipe.fe.friction import coulomb_return_map, rate_dependent_friction
 from harnesspipe.fe.rotation import quat_to_matrix
-from harnesspipe.fe.spatial_hash import box_pairs, node_aabbs, quad_aabbs, segment_aabbs
+from harnesspipe.fe.spatial_hash import (box_pairs, node_aabbs, quad_aabbs, segment_aabbs,
+                                         segment_closest_params)
 
 PARALLEL_COS = (0.98, 0.995)   # |cos| of two segments: crossing rule below, parallel rule above,
                                # both blended in between (see _segment_points)
@@ -356,16 +357,8 @@ def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out, blend):
         blend[0] = t * t * (3.0 - 2.0 * t)
         blend[1] = 6.0 * t * (1.0 - t) / (c1 - c0)
     mask = 0
-    if blend[0] < 1.0:
-        denom = A * E - B * B
-        s = min(1.0, max(0.0, (B * F - C * E) / denom))
-        u = (B * s + F) / E
-        if u < 0.0:
-            u = 0.0
-            s = min(1.0, max(0.0, -C / A))
-        elif u > 1.0:
-            u = 1.0
-            s = min(1.0, max(0.0, (B - C) / A))
+    if blend[0] < 1.0:                    # not parallel: A E - B^2 > 0
+        s, u = segment_closest_params(A, B, C, E, F)
         w = 1.0
         if (s == 0.0 and valence[a0] > 1) or (s == 1.0 and valence[a1] > 1):
             w *= 0.5
@@ -998,6 +991,47 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
     return n_active
 
 
+@njit(cache=True, inline="always")
+def _nf_reach(r, t_max, pen_max):
+    """Largest |distance| of a node (radius r) from a facet it can be in contact with (see
+    :func:`_nf_project`), with the slack of the early rejects."""
+    return max(r + 0.5 * t_max, pen_max - r) * (1.0 + REJECT_TOL)
+
+
+@njit(cache=True)
+def _node_quad_box_d2(x, nd, quads, q):
+    """Squared distance of node ``nd`` from the bounding box of quad ``q``'s nodes."""
+    d2 = 0.0
+    for c in range(3):
+        lo = min(min(x[quads[q, 0], c], x[quads[q, 1], c]),
+                 min(x[quads[q, 2], c], x[quads[q, 3], c]))
+        hi = max(max(x[quads[q, 0], c], x[quads[q, 1], c]),
+                 max(x[quads[q, 2], c], x[quads[q, 3], c]))
+        d = max(lo - x[nd, c], x[nd, c] - hi)
+        if d > 0.0:
+            d2 += d * d
+    return d2
+
+
+@njit(cache=True)
+def near_node_facet_pairs(x, nodes, node_r, quads, quad_t, pairs, pen_max, margin):
+    """Mask of the candidate (node, quad) pairs of :func:`node_facet_contact` that can
+    come into contact before the next search: node within ``_nf_reach + margin`` of the
+    quad's node box.  Until the next search every node stays within ``margin / 2`` of
+    where it is now (the search rule), so the box distance shrinks by less than
+    ``margin``; a pair dropped here would be rejected early by :func:`_nf_project` at
+    every step until then (same result).  The mask keeps the order of ``pairs``."""
+    t_max = 0.0
+    for q in range(quad_t.shape[0]):
+        t_max = max(t_max, quad_t[q])
+    keep = np.empty(pairs.shape[0], dtype=np.bool_)
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        lim = _nf_reach(node_r[i], t_max, pen_max) + margin
+        keep[p] = _node_quad_box_d2(x, nodes[i], quads, pairs[p, 1]) <= lim * lim
+    return keep
+
+
 @njit(cache=True)
 def _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, p0, p1, pd):
     """Closest points of the (node, quad) pairs p0..p1-1 into pd (see node_facet_contact).
@@ -1019,17 +1053,8 @@ def _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, p0, p
         if (quads[q, 0] == nd or quads[q, 1] == nd or quads[q, 2] == nd
                 or quads[q, 3] == nd):
             continue
-        lim = max(node_r[i] + 0.5 * t_max, pen_max - node_r[i]) * (1.0 + REJECT_TOL)
-        d2 = 0.0
-        for c in range(3):
-            lo = min(min(x[quads[q, 0], c], x[quads[q, 1], c]),
-                     min(x[quads[q, 2], c], x[quads[q, 3], c]))
-            hi = max(max(x[quads[q, 0], c], x[quads[q, 1], c]),
-                     max(x[quads[q, 2], c], x[quads[q, 3], c]))
-            d = max(lo - x[nd, c], x[nd, c] - hi)
-            if d > 0.0:
-                d2 += d * d
-        if d2 > lim * lim:
+        lim = _nf_reach(node_r[i], t_max, pen_max)
+        if _node_quad_box_d2(x, nd, quads, q) > lim * lim:
             continue
         _project_quad(x, quads, q, x[nd], True, prj)
         d0 = x[nd, 0] - prj[2]

@@ -254,3 +254,76 @@ def node_aabbs(x, nodes, radius, margin):
             lo[i, k] = x[nodes[i], k] - pad
             hi[i, k] = x[nodes[i], k] + pad
     return lo, hi
+
+
+# --------------------------------------------------------------- narrow phase (skin)
+@njit(cache=True, inline="always")
+def segment_closest_params(A, B, C, E, F):
+    """Parameters ``(s, u)`` in [0, 1]^2 of the closest points ``a0 + s da``, ``b0 + u db``
+    of two segments of nonzero length, from ``A = da.da, B = da.db, C = da.r, E = db.db,
+    F = db.r`` (``r = a0 - b0``): the unconstrained minimiser of the squared distance,
+    clamped on s, u solved for it and clamped, s recomputed for a clamped u (Ericson 2005,
+    Real-Time Collision Detection, sec. 5.1.9); parallel segments (``A E - B^2 <= 0``)
+    start from s = 0."""
+    denom = A * E - B * B
+    s = min(1.0, max(0.0, (B * F - C * E) / denom)) if denom > 0.0 else 0.0
+    u = (B * s + F) / E
+    if u < 0.0:
+        u = 0.0
+        s = min(1.0, max(0.0, -C / A))
+    elif u > 1.0:
+        u = 1.0
+        s = min(1.0, max(0.0, (B - C) / A))
+    return s, u
+
+
+@njit(cache=True)
+def segment_distance(x, a0, a1, b0, b1):
+    """Smallest distance between the segments ``x[a0] x[a1]`` and ``x[b0] x[b1]``.
+
+    Closest points by :func:`segment_closest_params`; a point segment is handled as a
+    point."""
+    d1 = np.empty(3)
+    d2 = np.empty(3)
+    r = np.empty(3)
+    for k in range(3):
+        d1[k] = x[a1, k] - x[a0, k]
+        d2[k] = x[b1, k] - x[b0, k]
+        r[k] = x[a0, k] - x[b0, k]
+    A = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]
+    E = d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2]
+    F = d2[0] * r[0] + d2[1] * r[1] + d2[2] * r[2]
+    if A <= 0.0 and E <= 0.0:
+        s = u = 0.0
+    elif A <= 0.0:
+        s = 0.0
+        u = min(1.0, max(0.0, F / E))
+    else:
+        C = d1[0] * r[0] + d1[1] * r[1] + d1[2] * r[2]
+        if E <= 0.0:
+            u = 0.0
+            s = min(1.0, max(0.0, -C / A))
+        else:
+            B = d1[0] * d2[0] + d1[1] * d2[1] + d1[2] * d2[2]
+            s, u = segment_closest_params(A, B, C, E, F)
+    d = 0.0
+    for k in range(3):
+        c = r[k] + s * d1[k] - u * d2[k]
+        d += c * c
+    return math.sqrt(d)
+
+
+@njit(cache=True)
+def near_segment_pairs(x, seg, seg_r, pairs, margin):
+    """Mask of the candidate pairs (e.g. of :func:`box_pairs` on :func:`segment_aabbs`)
+    whose segments are closer than ``r_a + r_b + margin`` -- the Verlet skin on the true
+    distance.  Until the next search every node stays within ``margin / 2`` of where it
+    is now (the search rule), so two segments approach by less than ``margin``: a pair
+    dropped here cannot touch before then.  The mask keeps the order of ``pairs``."""
+    keep = np.empty(pairs.shape[0], dtype=np.bool_)
+    for p in range(pairs.shape[0]):
+        a = pairs[p, 0]
+        b = pairs[p, 1]
+        reach = (seg_r[a] + seg_r[b] + margin) * (1.0 + 1e-9)
+        keep[p] = segment_distance(x, seg[a, 0], seg[a, 1], seg[b, 0], seg[b, 1]) < reach
+    return keep

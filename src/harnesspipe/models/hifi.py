@@ -35,8 +35,8 @@ from harnesspipe.fe.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
 from harnesspipe.fe.shell_bt import (init_shell_state, shell_energies, shell_forces,
                                      shell_lumped_mass)
-from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, node_aabbs, quad_aabbs,
-                                         segment_aabbs)
+from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
+                                         quad_aabbs, segment_aabbs)
 from harnesspipe.models import hifi_mesh as hm
 from harnesspipe.models.hifi_parts import Pins, Wires
 from harnesspipe.models.tube_equivalent import from_config as tube_equivalent
@@ -420,10 +420,10 @@ class BundleSystem:
         self.searches += 1
         lo, hi = segment_aabbs(x, self.seg, self.seg_r, m)
         cell = float(np.median(np.max(hi - lo, axis=1)))
-        self.ww_pairs = box_pairs(lo, hi, lo, hi, cell, True)
+        p = box_pairs(lo, hi, lo, hi, cell, True)
         if self.ww_skip is not None:
-            self.ww_pairs = self.ww_pairs[~np.any(self.ww_skip[self.ww_pairs], axis=1)]
-        p = self.ww_pairs
+            p = p[~np.any(self.ww_skip[p], axis=1)]
+        self.ww_pairs = p = p[near_segment_pairs(x, self.seg, self.seg_r, p, m)]
         other = self.seg_body[p[:, 0]] != self.seg_body[p[:, 1]]
         self.ww_hist = ce.fit_slot_history(self.ww_hist, np.min(p[other], axis=1))
         for fs in self.facet_sets:
@@ -433,7 +433,9 @@ class BundleSystem:
         lo_n, hi_n = node_aabbs(self.x, fs["nodes"], fs["r"], self.margin)
         lo_q, hi_q = quad_aabbs(self.x, fs["quads"], 0.5 * fs["t"], self.margin)
         cell = float(np.median(np.max(hi_q - lo_q, axis=1)))
-        fs["pairs"] = box_pairs(lo_n, hi_n, lo_q, hi_q, cell, False)
+        p = box_pairs(lo_n, hi_n, lo_q, hi_q, cell, False)
+        fs["pairs"] = p[ce.near_node_facet_pairs(self.x, fs["nodes"], fs["r"], fs["quads"],
+                                                 fs["t"], p, fs["pen_max"], self.margin)]
 
     def forces(self, t, v, dt):
         """All force families at the current configuration; phase wall times in ``phase``."""
