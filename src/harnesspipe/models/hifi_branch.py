@@ -120,9 +120,9 @@ class _Piece:
 
     def __init__(self, mesh, d, s_centre, s_min):
         self.mesh, self.d = mesh, d
-        self.s = mesh.X[:, 0] + s_centre                    # distance from the branch point
+        s = mesh.X[:, 0] + s_centre                         # distance from the branch point
         self.X = s_centre * d + mesh.X @ _frame(d)
-        keep = self.s >= s_min - 1e-9
+        keep = s >= s_min - 1e-9
         nw = mesh.n_wire_nodes
         self.wire_keep = keep[:nw]
         shell_ok = np.all(keep[mesh.shell_conn], axis=1)
