@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchlib import jit_seconds, write_section
+from benchlib import RESULTS, jit_seconds, write_section
 
 HEADING = "## Hi-fi three-point"
 CASE = "cwb19_t2_closed"
@@ -183,8 +183,30 @@ def main() -> None:
                   convergence_line(f"mesh: default vs finer ({', '.join(f'{k} {v}' for k, v in FINER.items())})",
                                    base, fine),
                   convergence_line("mass scaling: f_m 25 vs 10 at the same t_total", base, light)]
+    else:
+        lines += previous_convergence()
     write_section(HEADING, "\n".join(lines))
     print("\n".join(lines))
+
+
+def previous_convergence() -> list[str]:
+    """The convergence paragraph of the section now in RESULTS.md (kept when a run without
+    ``--convergence`` rewrites the section), marked as an earlier measurement."""
+    text = RESULTS.read_text() if RESULTS.exists() else ""
+    start = text.find(HEADING + "\n")
+    if start < 0:
+        return []
+    end = text.find("\n## ", start + len(HEADING))
+    section = text[start:end if end >= 0 else len(text)]
+    at = section.find("Convergence of the force curve")
+    if at < 0:
+        return []
+    old = section[at:].rstrip().splitlines()
+    if "(earlier run" not in old[0]:
+        old[0] = old[0].replace("Convergence of the force curve",
+                                "Convergence of the force curve (earlier run; `--convergence` "
+                                "measures it anew)", 1)
+    return [""] + old
 
 
 if __name__ == "__main__":
