@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 import harnesspipe  # noqa: F401
-from harnesspipe.fe.static import ConvergenceError, NewtonSettings, constrain_band, follow_path
+from harnesspipe.fe.static import (ConvergenceError, NewtonSettings, band_lu_solve, constrain_band,
+                                  follow_path)
 
 
 class Springs:
@@ -53,6 +54,45 @@ def test_path_reaches_equilibrium_at_every_stop():
     for lam, u in seen:
         assert np.allclose(p.c * np.arctan(u) + u**3, lam * p.F, rtol=1e-9)
     assert [s[0] for s in seen] == pytest.approx([0.25, 0.5, 0.75, 1.0])
+
+
+def _to_band(K, bw):
+    n = K.shape[0]
+    band = np.zeros((2 * bw + 1, n))
+    for i in range(n):
+        for j in range(max(0, i - bw), min(n, i + bw + 1)):
+            band[bw + i - j, j] = K[i, j]
+    return band
+
+
+@pytest.mark.parametrize("n, bw", [(1, 0), (7, 1), (40, 3), (60, 11)])
+def test_band_lu_solve_matches_dense_solve(n, bw):
+    """Nonsymmetric band matrices whose diagonal is small or zero: the pivoting must
+    interchange rows (and fill in above the band) to solve them."""
+    rng = np.random.default_rng(n + bw)
+    K = np.zeros((n, n))
+    for i in range(n):
+        for j in range(max(0, i - bw), min(n, i + bw + 1)):
+            K[i, j] = rng.normal()
+    K[np.arange(n), np.arange(n)] *= 1e-3
+    if n > 1:
+        K[0, 0] = 0.0
+    r = rng.normal(size=n)
+    band = _to_band(K, bw)
+    du = np.empty(n)
+    ok = band_lu_solve(band, r, bw, np.empty((n, 3 * bw + 1)), np.empty(n, dtype=np.int64),
+                       np.empty(n), du)
+    assert ok
+    assert np.allclose(K @ du, -r, atol=1e-9 * np.abs(r).max() * np.linalg.cond(K))
+    assert np.array_equal(band, _to_band(K, bw))          # the input is left alone
+
+
+def test_band_lu_solve_reports_a_singular_matrix():
+    K = np.diag([1.0, 2.0, 3.0])
+    K[1, 1] = 0.0                                         # a zero column: no pivot
+    du = np.empty(3)
+    assert not band_lu_solve(_to_band(K, 1), np.ones(3), 1, np.empty((3, 4)),
+                             np.empty(3, dtype=np.int64), np.empty(3), du)
 
 
 def test_constrained_dofs_stay_put():

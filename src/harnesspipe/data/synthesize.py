@@ -83,10 +83,16 @@ def _decimate(curve: Curve, rows: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _write_csv(path: Path, header: tuple[str, ...], columns: list[np.ndarray], fmts: list[str]):
+    """Write the columns with their formats; a value that prints as zero is written
+    without a sign, so round-off below the printed digits never shows in the file."""
     lines = [",".join(header)]
     for row in zip(*columns):
-        lines.append(",".join(f % v for f, v in zip(fmts, row)))
+        lines.append(",".join(_unsigned_zero(f % v) for f, v in zip(fmts, row)))
     path.write_text("\n".join(lines) + "\n")
+
+
+def _unsigned_zero(text: str) -> str:
+    return text[1:] if text.startswith("-") and not text.strip("-0.") else text
 
 
 def write_sample(folder: Path, stem: str, curve: Curve, spec: TestSpec,

@@ -30,7 +30,9 @@ path, Crisfield 1991, sec. 9.4.2); a failed extrapolated attempt is retried from
 converged state before the step is cut.  The energy reference of an extrapolated
 increment is the larger of its first correction's and the previous increment's
 (scaled by the step ratio squared), so a good predictor does not tighten the test.
-The banded tangent is factorised by LAPACK ``dgbsv`` (partial pivoting) directly.
+The banded tangent is factorised by :func:`band_lu_solve`, Gaussian elimination with
+partial pivoting in band storage (the algorithm of LAPACK ``dgbtf2``/``dgbtrs``), in
+one Numba call per correction.
 A correction whose energy already passes the test is expected to be the last one:
 its residual is evaluated without the tangent (which would go unused), and the
 tangent is evaluated after all only if the force test then fails.
@@ -41,7 +43,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
-from scipy.linalg import lapack
 
 
 class ConvergenceError(RuntimeError):
@@ -100,20 +101,107 @@ def band_matvec(band, x, bw, out):
                 out[i] += band[bw + i - j, j] * x[j]
 
 
+PIVOT_TOL = 1.0e-12  # smallest pivot of the equilibrated tangent (its diagonal is +-1)
+
+
+@njit(cache=True)
+def band_lu_solve(band, r, bw, lu, ipiv, scale, du):
+    """Solve ``K du = -r`` for K in band storage (half bandwidth ``bw``); True on success.
+
+    The system is first equilibrated symmetrically, ``(D K D) y = -D r`` with ``du = D y``
+    and ``D = diag(|K_jj|^-1/2)`` in ``scale`` (n): beam rows mix forces and moments of
+    very different size, and without it partial pivoting swaps rows in about half the
+    columns (fill-in doubles the work).  Then Gaussian elimination with partial
+    pivoting in band storage (Golub & Van Loan 2013, sec. 3.5.2 and 4.3; the algorithm
+    of LAPACK ``dgbtf2`` + ``dgbtrs``).
+    ``lu`` (n x (3 bw + 1)) holds column j of the band contiguously in ``lu[j]``:
+    ``A(i, j) = lu[j, 2 bw + i - j]``, K in the last 2 bw + 1 entries and bw more for
+    the fill-in of the interchanges; ``ipiv`` (n) receives the pivot rows.  ``band``
+    and ``r`` are not changed.  False for a singular tangent: a pivot of the
+    equilibrated matrix (unit diagonal) below ``PIVOT_TOL`` -- twelve digits lost, as
+    past a plastic collapse -- or a solution that is not finite.
+    """
+    n = r.shape[0]
+    kv = 2 * bw
+    for j in range(n):                       # equilibration: d_j = |K_jj|^-1/2
+        d = abs(band[bw, j])
+        scale[j] = 1.0 / np.sqrt(d) if d > 0.0 else 1.0
+    for j in range(n):                       # lu <- D K D
+        for k in range(bw):
+            lu[j, k] = 0.0
+        for k in range(2 * bw + 1):
+            i = j + k - bw
+            lu[j, bw + k] = band[k, j] * scale[j] * scale[i] if 0 <= i < n else 0.0
+    ju = 0
+    for j in range(n):
+        km = min(bw, n - 1 - j)
+        col = lu[j]
+        jp = j
+        big = abs(col[kv])
+        for i in range(j + 1, j + km + 1):
+            if abs(col[kv + i - j]) > big:
+                big = abs(col[kv + i - j])
+                jp = i
+        ipiv[j] = jp
+        if big <= PIVOT_TOL:                 # singular to working precision
+            return False
+        ju = max(ju, min(jp + bw, n - 1))
+        if jp != j:
+            for c in range(j, ju + 1):
+                t = lu[c, kv + j - c]
+                lu[c, kv + j - c] = lu[c, kv + jp - c]
+                lu[c, kv + jp - c] = t
+        piv = col[kv]
+        coupled = False
+        for k in range(kv + 1, kv + km + 1):
+            col[k] /= piv
+            coupled |= col[k] != 0.0
+        if not coupled:                       # e.g. a constrained dof: nothing to eliminate
+            continue
+        for c in range(j + 1, ju + 1):
+            o = kv + j - c                    # A(j, c) = lu[c, o]; A(i, c) = lu[c, o + i - j]
+            a_jc = lu[c, o]
+            if a_jc != 0.0:
+                for k in range(1, km + 1):
+                    lu[c, o + k] -= col[kv + k] * a_jc
+    for i in range(n):
+        du[i] = -r[i] * scale[i]
+    for j in range(n):                       # L: interchanges and multipliers
+        jp = ipiv[j]
+        if jp != j:
+            t = du[j]
+            du[j] = du[jp]
+            du[jp] = t
+        for k in range(1, min(bw, n - 1 - j) + 1):
+            du[j + k] -= lu[j, kv + k] * du[j]
+    for j in range(n - 1, -1, -1):           # U: upper bandwidth 2 bw after the fill-in
+        du[j] /= lu[j, kv]
+        if not np.isfinite(du[j]):
+            return False
+        for i in range(max(0, j - kv), j):
+            du[i] -= lu[j, kv + i - j] * du[j]
+    for i in range(n):
+        du[i] *= scale[i]
+    return True
+
+
 class _BandSolver:
-    """Solve K du = -r with K in LAPACK band storage, through ``dgbsv`` (work kept)."""
+    """Solve K du = -r with K in band storage through :func:`band_lu_solve` (work kept)."""
 
     def __init__(self, bw: int, n: int):
         self.bw = bw
-        self.ab = np.zeros((3 * bw + 1, n), order="F")  # bw extra rows for the LU fill-in
+        self.lu = np.empty((n, 3 * bw + 1))
+        self.ipiv = np.empty(n, dtype=np.int64)
+        self.scale = np.empty(n)
 
     def __call__(self, band, r):
-        if self.ab.shape[1] != r.shape[0]:
-            self.ab = np.zeros((3 * self.bw + 1, r.shape[0]), order="F")
-        self.ab[self.bw:] = band
-        _, _, du, info = lapack.dgbsv(self.bw, self.bw, self.ab, -r,
-                                      overwrite_ab=True, overwrite_b=True)
-        if info != 0 or not np.all(np.isfinite(du)):
+        n = r.shape[0]
+        if self.lu.shape[0] != n:
+            self.lu = np.empty((n, 3 * self.bw + 1))
+            self.ipiv = np.empty(n, dtype=np.int64)
+            self.scale = np.empty(n)
+        du = np.empty(n)
+        if not band_lu_solve(band, r, self.bw, self.lu, self.ipiv, self.scale, du):
             raise np.linalg.LinAlgError("singular tangent")
         return du
 
