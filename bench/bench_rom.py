@@ -71,8 +71,8 @@ def opensees_pinned(E, sigma_y, radius, span, deflection, n_el, n_inc, n_rings, 
     ops.model("basic", "-ndm", ndm, "-ndf", 3 if ndm == 2 else 6)
     for k in range(n_el + 1):
         ops.node(k + 1, span * k / n_el, *([0.0] * (ndm - 1)))
-        ux, uy = int(k == 0), int(k in (0, n_el))
-        ops.fix(k + 1, ux, uy, 0) if ndm == 2 else ops.fix(k + 1, ux, uy, 1, 1, 1, 0)
+        planar = (0,) if ndm == 2 else (1, 1, 1, 0)   # free rz; 3D: uz, rx, ry fixed
+        ops.fix(k + 1, int(k == 0), int(k in (0, n_el)), *planar)
     ops.uniaxialMaterial("ElasticPP", 1, E, sigma_y / E)
     if ndm == 2:
         ops.section("Fiber", 1)
