@@ -69,24 +69,31 @@ def calibration(component: str) -> str:
 
 
 def shell_cells() -> str:
+    """The 3D half-pitch cell with and without the cut on two meshes (the coarser one
+    shows how far it is from converged), beside the axisymmetric cell the fit uses."""
     from harnesspipe.models.tensile import resolution, simulate, simulate_shell_tube
     truth = TABLE2["open_tube"]
-    res = resolution("default", meridian=8, circumference=12, n_steps=25)
     axi = simulate("open_tube", *truth)
-    rows = []
-    for cut in (False, True):
-        t0 = time.perf_counter()
-        df = simulate_shell_tube(*truth, cut=cut, res=res)
-        rows.append((cut, time.perf_counter() - t0, df))
-    picks = [5, 10, 15, 20, 25]
+    picks = [5, 10, 15, 17.5, 19.75, 22.5, 25]
 
     def at(df):
-        return " / ".join(f"{np.interp(u, df.displacement_mm, df.force_N):.1f}" for u in picks)
+        return np.array([np.interp(u, df.displacement_mm, df.force_N) for u in picks])
 
-    lines = [f"- axisymmetric cell (default, 32 elements): F at u = {picks} mm: {at(axi)} N"]
-    for cut, wall, df in rows:
-        lines.append(f"- 3D shell cell, 8 x 12 elements, {'open (cut + contact)' if cut else 'closed'}:"
-                     f" {at(df)} N ({wall:.1f} s)")
+    def fmt(F):
+        return " / ".join(f"{f:.1f}" for f in F)
+
+    lines = [f"F at u = {picks} mm; axisymmetric cell (default, 32 elements): {fmt(at(axi))} N"]
+    for meridian, circumference in ((8, 12), (12, 24)):
+        res = resolution("default", meridian=meridian, circumference=circumference, n_steps=100)
+        F = {}
+        for cut in (False, True):
+            t0 = time.perf_counter()
+            F[cut] = at(simulate_shell_tube(*truth, cut=cut, res=res))
+            lines.append(f"- 3D shell cell, {meridian} x {circumference} elements, 100 steps, "
+                         f"{'open (cut + contact)' if cut else 'closed'}: {fmt(F[cut])} N "
+                         f"({time.perf_counter() - t0:.0f} s)")
+        ratio = " / ".join(f"{r:.2f}" for r in F[True] / F[False])
+        lines.append(f"  open / closed: {ratio}")
     return "\n".join(lines)
 
 
