@@ -7,8 +7,9 @@ Measures, on one core:
 * the JIT time with an empty Numba cache and when loading from the cache (fresh
   subprocesses with HARNESSPIPE_NUMBA_CACHE pointing at a temporary folder);
 * optionally OpenSeesPy on the pinned model (co-rotational displacement-based fibre
-  beams, same mesh, Lobatto points and increments, elastic-perfectly plastic fibres):
-  force agreement and speed ratio.
+  beams, same mesh, Lobatto points and increments, elastic-perfectly plastic fibres), as
+  OpenSees' 3D model of it (the same 6 dofs per node) and as its 2D reduction: force
+  agreement and speed ratio of each.
 Appends the figures under "## ROM three-point" in bench/RESULTS.md (replacing that
 section only).
 """
