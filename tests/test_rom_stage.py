@@ -116,7 +116,9 @@ def test_shipped_noisy_data_gives_E_within_5_percent(case):
 @pytest.mark.slow
 def test_shipped_noisy_closed_tube_data_calibrates_within_5_percent():
     """The closed-tube set, whose elastic limit lies well inside the test (5.7 % of the
-    span), is identified from the noisy mean of three scattered specimens."""
+    span), lands within 5 % of truth from the noisy mean of three scattered specimens.  Its
+    data fix sigma_Y, K, n only to 7-23 % (Cramer-Rao bound, bench/RESULTS.md); for the other
+    sets 5 % is out of any estimator's reach, see test_stage_reports_what_the_data_determine."""
     cfg = cfgmod.load()
     u, F = shipped_mean("cwb19_t2_closed")
     settings = settings_for(cfg, "cwb19_t2_closed", maxfev=600)
@@ -124,3 +126,33 @@ def test_shipped_noisy_closed_tube_data_calibrates_within_5_percent():
     fit = rom_fit.fit(u, F, settings)
     for name, value in cfg["paper"]["table3"]["cwb19_t2_closed"].items():
         assert fit.parameters[name] == pytest.approx(value, rel=0.05), name
+
+
+@pytest.mark.slow
+def test_stage_reports_what_the_data_determine(tmp_path):
+    """The ROM stage on the shipped half-lap set writes standard errors with its fit: E is
+    determined (SE < 5 %, and the specimens' own mean E within 2 SE), sigma_Y is not (SE above
+    30 %: the Cramer-Rao bound of the data is 86 % with E known), and the truth of every
+    hardening parameter lies within 3 SE of the fit."""
+    import json
+    from conftest import REPO
+    from harnesspipe.data.experimental import read_manifest
+    from harnesspipe.data.synthesize import read_truth
+    from harnesspipe.stages import data as stage_data
+    from harnesspipe.stages import rom as rom_stage
+    data, case = REPO / "data" / "experimental", "cwb19_t2_open_halflap"
+    (test_id,) = [t for t, e in read_manifest(data)["tests"].items()
+                  if e["kind"] == "three_point" and e["item"] == case]
+    stage_data.prepare_test(data, test_id, tmp_path / "ref.h5")
+    cfg = cfgmod.load()
+    settings = settings_for(cfg, case, maxfev=300)
+    rom_stage.fit_case(case, tmp_path / "ref.h5", settings, tmp_path / "fit")
+    fit = json.loads((tmp_path / "fit" / "fit.json").read_text())
+    p, se = fit["parameters"], fit["standard_error"]
+    truth = read_truth(data)[test_id]
+    E_specimens = np.exp(np.mean([np.log(s["E"]) for s in truth["samples"].values()]))
+    assert se["E"] < 0.05
+    assert abs(math.log(p["E"] / E_specimens)) < 2 * se["E"]
+    assert se["sigma_y"] > 0.3
+    for name in ("sigma_y", "K", "n"):
+        assert abs(math.log(p[name] / truth["parameters"][name])) < 3 * se[name], name

@@ -46,8 +46,8 @@ rule rom_fit:
     params:
         settings=lambda wc: rom_settings(wc.case),
         code=source_hash("fe", "models/rom_beam.py", "rom.py", "calibrate/rom.py", "calibrate/eq13.py",
-                         "calibrate/simplex.py", "calibrate/objective.py", "stages/rom.py",
-                         "stages/common.py",
+                         "calibrate/simplex.py", "calibrate/objective.py", "calibrate/uncertainty.py",
+                         "stages/rom.py", "stages/common.py", "stages/data.py",
                          *(["stages/hifi_chain.py"] if config["rom"]["reference"] == "hifi" else [])),
     threads: 1
     priority: 1

@@ -33,8 +33,8 @@ rule tensile_fit:
     params:
         settings=lambda wc: tensile_settings(wc.component),
         code=source_hash("fe", "models/tensile.py", "calibrate/tensile.py", "calibrate/hardening.py",
-                         "calibrate/simplex.py", "calibrate/objective.py", "stages/tensile.py",
-                         "stages/common.py"),
+                         "calibrate/simplex.py", "calibrate/objective.py", "calibrate/uncertainty.py",
+                         "stages/tensile.py", "stages/common.py", "stages/data.py"),
     wildcard_constraints:
         component="closed_tube|open_tube|fabric_tube",
     threads: 1

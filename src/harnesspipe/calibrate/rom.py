@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harnesspipe import rom
-from harnesspipe.calibrate import eq13
+from harnesspipe.calibrate import eq13, uncertainty
 from harnesspipe.calibrate.hardening import flow_stresses, hardening_from_three, hardening_from_two
 from harnesspipe.calibrate.objective import l2_error, objective_key
 from harnesspipe.calibrate.simplex import FitResult, nelder_mead
@@ -145,3 +145,15 @@ def fit(u, F, settings: dict, log_path=None) -> RomFit:
                       restarts=rs["simplex"]["restarts"], start_scaling=START_SCALING, log_path=log_path,
                       key=objective_key(u, F, settings))
     return RomFit(params_of(res.x), E_eq13, sigma_y_eq13, res)
+
+
+def standard_errors(u, F, params: dict, settings: dict, replicates=None) -> dict:
+    """Standard errors of ln E, ln sigma_Y, ln K, ln n at a fit ``params`` to F(u)
+    (:func:`harnesspipe.calibrate.uncertainty.fit_standard_errors`; ``replicates``:
+    the measured curves whose mean F is, on the same grid)."""
+    u = np.asarray(u, dtype=float)
+
+    def curve(p):
+        c = simulate(p, settings)
+        return np.interp(u, c["deflection_mm"], c["force_N"])
+    return uncertainty.fit_standard_errors(curve, params, ["E", "sigma_y", "K", "n"], F, replicates)

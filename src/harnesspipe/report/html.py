@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import base64
 import html
+import math
 from pathlib import Path
 
 import h5py
@@ -85,6 +86,22 @@ def data_section(summary: str, prepared_paths: list[Path], truth: dict) -> str:
             + '<div class="fit">' + "".join(figs) + "</div>")
 
 
+SE_NOTE = ('<p class="note">Standard error: how far the parameter could move for the scatter of '
+           'the measured replicates (or, for a single reference curve, the fit residual), from the '
+           'linearised least-squares problem (calibrate/uncertainty.py). "Not determined": the curve '
+           'fixes only a combination of this parameter with others, so its value, and its distance '
+           'from truth or paper, carries no information on its own.</p>')
+
+
+def _standard_error(s_ln) -> str:
+    """A standard error of ln p as '+-x %'; 'not determined' where it exceeds 100 %."""
+    if s_ln is None:
+        return ""
+    if not math.isfinite(s_ln) or s_ln > 1.0:
+        return "not determined"
+    return f"\u00b1{100.0 * s_ln:.2g} %"
+
+
 def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dict | None,
               reference: pd.DataFrame | None = None) -> str:
     """One fit: values beside truth and paper, the curve against the measured band (``prepared``,
@@ -93,6 +110,9 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
     names = list(fit["parameters"])
     label = "fitted" if fit.get("role", "calibration") == "calibration" else f"used ({fit['role']}, no refit)"
     rows = [[label] + [fit["parameters"][k] for k in names]]
+    se = fit.get("standard_error")
+    if se:
+        rows.append(["standard error"] + [_standard_error(se.get(k)) for k in names])
     if truth:
         rows.append(["truth (synthetic)"] + [truth.get(k, "") for k in names])
     if paper:
@@ -102,7 +122,8 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
             f"<p>Reference: test <code>{html.escape(fit['test_id'])}</code>. "
             f"||e||<sub>l2</sub> = {fit['error_l2']:.4g} N (relative {100 * fit['error_rel']:.2f} %), "
             f"{fit['nfev']} evaluations, {fit['wall_s']:.1f} s.{status}</p>"
-            + _table(["", *names], rows))
+            + _table(["", *names], rows)
+            + (SE_NOTE if se else ""))
     figs = [_img(plots.fit_figure(prepared, curve, title=fit["item"], reference=reference), f"fit {fit['item']}")]
     if ((fit_dir / "shapes.csv").exists() and prepared is not None
             and any("markers" in s for s in prepared.samples.values())):
@@ -129,9 +150,12 @@ def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth:
         paper = paper_values(cfg, stage, fit["item"])
         tr = truth.get(prepared.test_id if prepared is not None else fit["test_id"], {}).get("parameters")
         blocks.append(fit_block(fit, path.parent, prepared, paper, tr, reference))
+        se = fit.get("standard_error", {})
         for k, v in fit["parameters"].items():
-            summary.append([fit["item"], k, v, tr.get(k, "") if tr else "", paper.get(k, "") if paper else ""])
-    table = _table(["item", "parameter", "recovered", "truth", f"paper ({table_name})"], summary)
+            summary.append([fit["item"], k, v, _standard_error(se.get(k)), tr.get(k, "") if tr else "",
+                            paper.get(k, "") if paper else ""])
+    table = _table(["item", "parameter", "recovered", "standard error", "truth", f"paper ({table_name})"],
+                   summary)
     return f"<h2>{html.escape(heading)}</h2>{table}{''.join(blocks)}"
 
 

@@ -70,11 +70,15 @@ class Prepared:
     hi: np.ndarray
     samples: dict[str, dict[str, np.ndarray]]
 
+    def replicates(self) -> np.ndarray:
+        """Force of every replicate on ``grid`` (n_samples x n_grid)."""
+        return np.array([np.interp(self.grid, s["displacement_mm"], s["force_N"])
+                         for s in self.samples.values()])
+
     def standard_error(self) -> np.ndarray:
         """Standard error of the mean curve on ``grid``: the replicates' sample standard
         deviation over sqrt(n) (zero for a single replicate)."""
-        F = np.array([np.interp(self.grid, s["displacement_mm"], s["force_N"])
-                      for s in self.samples.values()])
+        F = self.replicates()
         if F.shape[0] < 2:
             return np.zeros_like(self.grid)
         return F.std(axis=0, ddof=1) / np.sqrt(F.shape[0])

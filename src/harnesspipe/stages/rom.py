@@ -45,6 +45,8 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
     grid, F_ref, test_id, source = reference_curve(reference, settings)
     t0 = time.perf_counter()
     result = rom_fit.fit(grid, F_ref, settings, log_path=outdir / "trace.h5")
+    replicates = source.replicates() if settings["reference"] == "measured" else None
+    se = rom_fit.standard_errors(grid, F_ref, result.parameters, settings, replicates)
     curve, shapes = rom_fit.simulate(result.parameters, settings, return_shapes=True)
     curve = curve.rename(columns={"deflection_mm": "displacement_mm"})
     write_shapes(outdir, shapes)
@@ -54,7 +56,7 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
                      error_l2=l2_error(F_ref, F_fit), error_rel=relative_l2_error(F_ref, F_fit),
                      nfev=result.result.nfev, converged=result.result.converged,
                      wall_s=time.perf_counter() - t0, curve=curve,
-                     extra={"E_eq13": result.E_eq13, "sigma_y_eq13": result.sigma_y_eq13, "reference": settings["reference"],
+                     extra={"E_eq13": result.E_eq13, "sigma_y_eq13": result.sigma_y_eq13, "reference": settings["reference"], "standard_error": se,
                             "fitted": list(settings["rom"]["simplex_parameters"])})
     title = f"{case}: ROM at fitted properties"
     if settings["reference"] == "hifi":

@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe.calibrate import tensile as tcal
+from harnesspipe.calibrate.uncertainty import fit_standard_errors
 from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
 from harnesspipe.models import tensile as tmodel
 from harnesspipe.report import plots
@@ -36,16 +37,25 @@ def fit_component(component: str, reference: Path, settings: dict, outdir: Path)
     if component == "fabric_tube":
         params, fit = tcal.calibrate_fabric(measured, initial=settings["initial"], **common)
         extra = {"u_dev": params.pop("u_dev")}
-        sim = tmodel.simulate(component, *params.values(), settings["nu"], preset=settings["preset"],
-                              elongation=float(measured["displacement_mm"].max()))
+        geometry = {"elongation": float(measured["displacement_mm"].max())}
     else:
         params, fit = tcal.calibrate_tube(component, measured, initial=settings["initial"],
                                           pitch=settings["pitch"],
                                           key=objective_key(ref.grid, ref.mean, settings), **common)
         extra = {}
-        sim = tmodel.simulate(component, *params.values(), settings["nu"], preset=settings["preset"],
-                              pitch=settings["pitch"])
-    curve = pd.DataFrame({"displacement_mm": scale * sim["displacement_mm"], "force_N": sim["force_N"]})
+        geometry = {"pitch": settings["pitch"]}
+
+    def simulate(p: dict) -> pd.DataFrame:
+        sim = tmodel.simulate(component, p["E"], p["sigma_y"], p["K"], p["n"], settings["nu"],
+                              preset=settings["preset"], **geometry)
+        return pd.DataFrame({"displacement_mm": scale * sim["displacement_mm"], "force_N": sim["force_N"]})
+
+    def on_grid(p: dict) -> np.ndarray:
+        c = simulate(p)
+        return np.interp(ref.grid, c["displacement_mm"], c["force_N"])
+    extra["standard_error"] = fit_standard_errors(on_grid, params, list(TABLE2_COLUMNS[1:]), ref.mean,
+                                                  ref.replicates())
+    curve = simulate(params)
     F_fit = np.interp(ref.grid, curve["displacement_mm"], curve["force_N"])
     path = write_fit(outdir, stage="tensile", item=component, test_id=ref.test_id, parameters=params,
                      error_l2=l2_error(ref.mean, F_fit), error_rel=relative_l2_error(ref.mean, F_fit),
