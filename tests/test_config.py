@@ -30,6 +30,8 @@ def test_schema_declares_draft_2020_12():
     ({"profile": "fast"}, "profile: 'fast' is not one of"),
     ({"interfaces": {"mu_k": 0.5}}, "interfaces.mu_k: 0.5 must be <= mu_s"),
     ({"materials": {"wire_type2": {"d_core": 2.0}}}, "materials.wire_type2.d_core"),
+    ({"branch": {"hifi": {"in_all": ["default", "fine"]}}}, "branch.hifi.in_all: ['fine'] not among"),
+    ({"branch": {"hifi": {"in_all": True}}}, "branch.hifi.in_all"),
 ])
 def test_bad_values_name_the_key(override, expected):
     with pytest.raises(cfgmod.ConfigError) as err:

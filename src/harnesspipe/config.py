@@ -65,6 +65,10 @@ def _check_semantics(cfg: dict, source: str) -> None:
     if cfg["profile"] not in cfg["profiles"]:
         raise ConfigError(f"{source}: profile: {cfg['profile']!r} is not one of "
                           f"{sorted(cfg['profiles'])} (defined under profiles)")
+    unknown = sorted(set(cfg["branch"]["hifi"]["in_all"]) - set(cfg["profiles"]))
+    if unknown:
+        raise ConfigError(f"{source}: branch.hifi.in_all: {unknown} not among the profiles "
+                          f"{sorted(cfg['profiles'])}")
     for name in ("wire_type1", "wire_type2"):
         w = cfg["materials"][name]
         if w["d_core"] >= w["d_outer"]:

@@ -142,6 +142,12 @@ rule branch_hifi:
         "--coverings {input.table2} --outdir {RES}/branch/hifi > {log} 2>&1"
 
 
-if BRANCH_HIFI["in_all"] and "branch" in FITS:
+rule branch_hifi_all:
+    """The hi-fi Y harness in any profile (in `all` for the profiles of branch.hifi.in_all)."""
+    input:
+        f"{RES}/branch/hifi/summary.json",
+
+
+if config["profile"] in BRANCH_HIFI["in_all"] and "branch" in FITS:
     TARGETS.append(f"{RES}/branch/hifi/summary.json")
     REPORT_EXTRA.append(f"{RES}/branch/hifi/summary.json")

@@ -366,11 +366,13 @@ BRANCH_HIFI_AT = (5.0, 10.0, 25.0, 50.0)   # crosshead travels of the Fig. 18a c
 
 def branch_hifi_section(results: Path) -> str:
     """The hi-fi Y harness beside the ROM and the in-plane test (Fig. 18a), with the cost of
-    each; empty when the hi-fi run (rule branch_hifi) is not part of this run."""
+    each; a note naming the target when the hi-fi run (rule branch_hifi) is not part of this run."""
     folder = Path(results) / "branch" / "hifi"
     summary = _read_json(folder / "summary.json")
     if summary is None:
-        return ""
+        return ("<h3>Hi-fi Y harness beside the ROM (Fig. 18a)</h3><p class='note'>Not run in this "
+                "profile (config <code>branch.hifi.in_all</code>); <code>snakemake --cores 2 "
+                "branch_hifi_all</code> runs it.</p>")
     hifi = pd.read_csv(folder / "curve.csv")
     curves = {"hi-fi (mesoscale)": hifi}
     roms = {}
