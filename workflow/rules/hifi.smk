@@ -147,6 +147,15 @@ def hifi_virtual_inputs(wc):
     return inputs
 
 
+def hifi_virtual_priority(wc):
+    """Longest virtual test first (so the last one to finish is a short one): 1 plus the run's
+    cost in wire-steps (wires x t_total_scale) / 1000, below the chain's 10; a reused run is 1."""
+    if hifi_reuse(wc.case):
+        return 1.0
+    case = HIFI_CASES[wc.case]
+    return 1.0 + sum(case["wires"].values()) * case.get("t_total_scale", 1.0) / 1000.0
+
+
 def hifi_role(case):
     if case in HIFI_VALIDATION:
         return "validation"
@@ -284,7 +293,7 @@ rule hifi_virtual:
     wildcard_constraints:
         case="|".join(sorted(HIFI_CASES)),
     threads: 1
-    priority: 1
+    priority: hifi_virtual_priority
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage hifi-run --case {wildcards.case} --role {params.role} "
         "--settings '{params.settings}' --coverings {input.table2} --interface {input.interface} "
