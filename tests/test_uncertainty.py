@@ -86,3 +86,12 @@ def test_a_fit_on_the_boundary_reports_no_standard_errors():
     model = lambda p: p["a"] * U + p["b"] * U**2
     se = unc.fit_standard_errors(model, {"a": 0.7, "b": 1e-12}, ["a", "b"], model({"a": 0.7, "b": 0.0}) + 0.1 * np.sin(U))
     assert all(np.isinf(v) for v in se.values())
+
+
+def test_a_failing_perturbed_simulation_gives_no_standard_errors():
+    """The fit stands; its errors are simply not available (the stage writes null)."""
+    def fragile(p):
+        if p["a"] > 0.7:
+            raise RuntimeError("no convergence")
+        return p["a"] * U
+    assert unc.fit_standard_errors(fragile, {"a": 0.7}, ["a"], 0.7 * U) is None

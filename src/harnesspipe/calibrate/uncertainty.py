@@ -92,14 +92,18 @@ def replicate_log_covariance(J: np.ndarray, replicates: np.ndarray) -> np.ndarra
 
 
 def fit_standard_errors(curve: Callable[[dict], np.ndarray], params: dict, names: list[str],
-                        reference: np.ndarray, replicates: np.ndarray | None = None) -> dict:
+                        reference: np.ndarray, replicates: np.ndarray | None = None) -> dict | None:
     """Standard errors of ln p of the parameters ``names`` fitted at ``params`` to the curve
     ``reference``: from the replicates' scatter (sandwich) when there are two or more, from
     the fit residual otherwise.  ``curve(p)`` returns the model force on the reference grid.
 
     A fit on the boundary of the admissible set (a parameter driven to ~0, whose ln p no
-    longer moves the curve) has no linearised standard errors: all are infinite."""
-    J = log_sensitivities(curve, params, names)
+    longer moves the curve) has no linearised standard errors: all are infinite.  When a
+    perturbed simulation fails (RuntimeError, ArithmeticError), there are none: None."""
+    try:
+        J = log_sensitivities(curve, params, names)
+    except (RuntimeError, ArithmeticError):
+        return None
     norms = np.linalg.norm(J, axis=0)
     if norms.min() < BOUNDARY * norms.max():
         return dict.fromkeys(names, float("inf"))

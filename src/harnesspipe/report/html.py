@@ -150,7 +150,7 @@ def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth:
         paper = paper_values(cfg, stage, fit["item"])
         tr = truth.get(prepared.test_id if prepared is not None else fit["test_id"], {}).get("parameters")
         blocks.append(fit_block(fit, path.parent, prepared, paper, tr, reference))
-        se = fit.get("standard_error", {})
+        se = fit.get("standard_error") or {}
         for k, v in fit["parameters"].items():
             summary.append([fit["item"], k, v, _standard_error(se.get(k)), tr.get(k, "") if tr else "",
                             paper.get(k, "") if paper else ""])
