@@ -122,3 +122,16 @@ def test_incomplete_settings_are_named(cfg, tmp_path):
     del settings["t_total"]
     with pytest.raises(Exception, match=r"missing \['t_total'\]"):
         branch_hifi.run(settings, tmp_path / "out")
+
+
+def test_report_leaves_out_a_y_harness_run_of_another_profile(tmp_path):
+    """A summary left in results/branch/hifi by a default run is not shown in a quick run's report
+    (branch.hifi.in_all: [default]); the section names the target instead."""
+    from harnesspipe import config as cfgmod
+    from harnesspipe.report.html import branch_hifi_section
+    folder = tmp_path / "branch" / "hifi"
+    folder.mkdir(parents=True)
+    (folder / "summary.json").write_text("{}")
+    cfg = cfgmod.load(overrides={"profile": "quick"})
+    text = branch_hifi_section(tmp_path, cfg)
+    assert "Not part of the quick profile's run" in text and "branch_hifi_all" in text

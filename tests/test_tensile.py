@@ -139,8 +139,9 @@ WITHIN_5_PERCENT = {"closed_tube": ("E",), "open_tube": ("E", "sigma_y", "K", "n
 @pytest.mark.parametrize("component", sorted(WITHIN_5_PERCENT))
 def test_stage_calibrates_the_shipped_noisy_data(component, tmp_path):
     """The tensile stage (default preset) on the shipped means: what the data determine is
-    within 5 % of truth; every parameter lies within 3 of its reported standard errors of the
-    truth (a parameter the data do not determine reports an infinite one)."""
+    within 5 % of truth, with a standard error below 10 %; the truth of every parameter with a
+    standard error lies in its 95 % interval (Student t on the replicates' degrees of freedom;
+    one the data do not determine has none, nor has a fit on a bound)."""
     import json
     import math
 
@@ -161,7 +162,15 @@ def test_stage_calibrates_the_shipped_noisy_data(component, tmp_path):
     fit_component(component, tmp_path / "ref.h5", settings, tmp_path / "fit")
     fit = json.loads((tmp_path / "fit" / "fit.json").read_text())
     truth = read_truth(data)[test_id]["parameters"]
+    from scipy.stats import t as student_t
+    p, se = fit["parameters"], fit["standard_error"]
+    on_bound = min(p[k] / truth[k] for k in p) < 1e-3
     for name in WITHIN_5_PERCENT[component]:
-        assert fit["parameters"][name] == pytest.approx(truth[name], rel=0.05), name
-    for name, se in fit["standard_error"].items():
-        assert abs(math.log(fit["parameters"][name] / truth[name])) < 3 * se, name
+        assert p[name] == pytest.approx(truth[name], rel=0.05), name
+        assert on_bound or se[name] < 0.1, name        # and the data say so
+    if on_bound:       # closed tube: sigma_Y driven to ~0 (n = 0.12 hides the yield): no errors
+        assert all(v is None for v in se.values())
+    t95 = student_t.ppf(0.975, fit["standard_error_dof"])     # 4.30 for three replicates
+    for name, s in se.items():
+        if s is not None:
+            assert abs(math.log(p[name] / truth[name])) < t95 * s, name

@@ -147,13 +147,30 @@ def fit(u, F, settings: dict, log_path=None) -> RomFit:
     return RomFit(params_of(res.x), E_eq13, sigma_y_eq13, res)
 
 
-def standard_errors(u, F, params: dict, settings: dict, replicates=None) -> dict:
-    """Standard errors of ln E, ln sigma_Y, ln K, ln n at a fit ``params`` to F(u)
-    (:func:`harnesspipe.calibrate.uncertainty.fit_standard_errors`; ``replicates``:
-    the measured curves whose mean F is, on the same grid)."""
+def standard_errors(u, F, params: dict, settings: dict, replicates) -> dict | None:
+    """Standard errors of ln E, ln sigma_Y, ln K, ln n of a fit ``params`` to the mean F(u)
+    of the measured ``replicates`` (:func:`harnesspipe.calibrate.uncertainty.fit_standard_errors`):
+    E (and sigma_Y when the simplex does not fit it) by eq. 13 on each replicate -- E with
+    the fit's model-consistent factor --, the simplex's parameters by least squares.  None
+    without replicates (a hi-fi reference is one deterministic curve: its residual is model
+    error, not scatter)."""
+    if replicates is None:
+        return None
     u = np.asarray(u, dtype=float)
+    span, r_o, rs = settings["three_point"]["span"], settings["r_o"], settings["rom"]
+
+    def eq13_modulus(force):
+        return eq13.modulus_from_slope(eq13.linear_part(u, force, span, rs["linear_window"])[0], span, r_o)
+    factor = params["E"] / eq13_modulus(F)
+    closed_form = {"E": [factor * eq13_modulus(Fk) for Fk in replicates]}
+    fitted = ["K", "n"]
+    if "sigma_y" in rs["simplex_parameters"]:
+        fitted.insert(0, "sigma_y")
+    else:
+        closed_form["sigma_y"] = [eq13.yield_stress(u, Fk, span, r_o, rs["yield_deflection"])
+                                  for Fk in replicates]
 
     def curve(p):
         c = simulate(p, settings)
         return np.interp(u, c["deflection_mm"], c["force_N"])
-    return uncertainty.fit_standard_errors(curve, params, ["E", "sigma_y", "K", "n"], F, replicates)
+    return uncertainty.fit_standard_errors(curve, params, fitted, F, replicates, closed_form)

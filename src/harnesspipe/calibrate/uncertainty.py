@@ -7,22 +7,28 @@ of variance s^2 per grid point
 
     Cov(ln p) = s^2 (J^T J)^-1 .
 
-With s^2 the known noise variance this is the Cramer-Rao bound: no unbiased
+With s^2 the known variance of independent Gaussian noise, evaluated at the
+truth, this is the Cramer-Rao bound of the linearised problem: no unbiased
 estimator from the same curve does better.  With s^2 = ||r||^2 / (N - m) (r the
 fit residual, N points, m parameters) it is the usual standard error of a
-nonlinear regression.  Errors correlated along the curve (specimen scatter in a
-mean of a few specimens) make the true spread larger than this figure; with
-n >= 2 replicate curves the sandwich form carries them: each replicate's
-deviation from the mean is mapped to a parameter deviation by the linearised
-least-squares solution d_k = (J^T J)^-1 J^T (F_k - F_mean), and
+nonlinear regression on one noisy curve.
 
-    Cov(ln p) = sum_k d_k d_k^T / (n (n - 1))
+A fit to the mean of n >= 2 replicate curves: errors correlated along the curve
+(specimen scatter) usually make the spread larger than that, so the replicates
+themselves are used ("sandwich"): each replicate's deviation from the mean is
+mapped to a parameter deviation, and
 
-is the covariance of the mean's estimate (few replicates give a rough figure:
-with three, it rests on two degrees of freedom).
+    Cov(ln p) = sum_k d_k d_k^T / (n (n - 1)) ,
 
-Standard errors are given in ln p: 0.05 means "+-5 %"; above ~0.3 the linear
-picture no longer holds and the parameter is simply not determined by the curve.
+the covariance of the mean's estimate, on n - 1 degrees of freedom (three
+replicates: two, a rough figure).  Parameters the calibration takes from a closed
+form (eq. 3, eq. 13) are evaluated on each replicate (their d_k directly); the
+least-squares ones take d_k = (J^T J)^-1 J^T (F_k - F_mean - J_c d_c,k), i.e.
+what is left after the closed-form parameters have moved the curve.
+
+Standard errors are in ln p: 0.05 means "+-5 %"; above ~0.3 the linear picture is
+rough, and above 1 (a factor e either way) the parameter is simply not determined
+by the curve.
 """
 from __future__ import annotations
 
@@ -31,9 +37,9 @@ from collections.abc import Callable
 import numpy as np
 
 LOG_STEP = 0.01       # central-difference step in ln p
-SINGULAR = 1e-14      # (J^T J) eigenvalue below this times the largest: direction not determined
-BOUNDARY = 1e-6      # a column of J this small against the largest: the parameter sits at ~0
-SHARE = 1e-3          # a parameter with a larger eigenvector component in such a direction is too
+SINGULAR = 1e-7       # singular value of J below this times the largest: direction not determined
+BOUNDARY = 1e-6       # a column of J this small against the largest: the parameter sits at ~0
+SHARE = 1e-3          # a parameter with a larger share in such a direction is not determined either
 
 
 def log_sensitivities(curve: Callable[[dict], np.ndarray], params: dict, names: list[str],
@@ -48,17 +54,19 @@ def log_sensitivities(curve: Callable[[dict], np.ndarray], params: dict, names: 
     return np.column_stack(columns)
 
 
-def _undetermined(JtJ: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Eigen-decomposition of J^T J and the mask of the directions the curve determines."""
-    lam, V = np.linalg.eigh(JtJ)
-    return lam, V, lam > SINGULAR * max(lam.max(), 0.0)
+def _pseudo_inverse(J: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(J^T J)^-1 J^T on the directions the curve determines (SVD of J: singular values
+    below SINGULAR times the largest are left out), V and the mask of the kept directions."""
+    U, sv, Vt = np.linalg.svd(J, full_matrices=False)
+    keep = sv > SINGULAR * sv.max()
+    return (Vt[keep].T / sv[keep]) @ U[:, keep].T, Vt.T, keep
 
 
 def _blank_undetermined(cov: np.ndarray, V: np.ndarray, keep: np.ndarray) -> np.ndarray:
-    """Infinite variance for every parameter with a share in an undetermined direction (an
-    eigenvector component above SHARE; smaller ones are round-off of a direction that is, in
-    exact arithmetic, the axis of another parameter)."""
-    touched = np.any(np.abs(V[:, ~keep]) > SHARE, axis=1)
+    """Infinite variance for every parameter with a share in the undetermined subspace (the
+    norm of its row of V over those directions above SHARE; smaller ones are round-off of a
+    direction that is, in exact arithmetic, the axis of another parameter)."""
+    touched = np.linalg.norm(V[:, ~keep], axis=1) > SHARE
     cov = cov.copy()
     cov[touched, :] = np.inf
     cov[:, touched] = np.inf
@@ -67,9 +75,8 @@ def _blank_undetermined(cov: np.ndarray, V: np.ndarray, keep: np.ndarray) -> np.
 
 def log_covariance(J: np.ndarray, variance: float) -> np.ndarray:
     """``variance * (J^T J)^-1``; directions the curve does not see get an infinite variance."""
-    lam, V, keep = _undetermined(J.T @ J)
-    cov = variance * (V[:, keep] / lam[keep]) @ V[:, keep].T
-    return _blank_undetermined(cov, V, keep)
+    P, V, keep = _pseudo_inverse(J)
+    return _blank_undetermined(variance * P @ P.T, V, keep)
 
 
 def residual_variance(residual: np.ndarray, n_parameters: int) -> float:
@@ -81,35 +88,60 @@ def residual_variance(residual: np.ndarray, n_parameters: int) -> float:
     return float(r @ r) / dof
 
 
-def replicate_log_covariance(J: np.ndarray, replicates: np.ndarray) -> np.ndarray:
-    """Sandwich covariance of ln p for a fit to the mean of ``replicates`` (n x N), n >= 2."""
+def replicate_log_covariance(J: np.ndarray, replicates: np.ndarray,
+                             closed_form: np.ndarray | None = None) -> np.ndarray:
+    """Sandwich covariance of ln p for a fit to the mean of ``replicates`` (n x N), n >= 2.
+
+    ``closed_form`` (n x c): ln of the parameters the calibration takes from a closed form,
+    evaluated on each replicate; they are the first c columns of ``J`` and of the result."""
     R = np.asarray(replicates, dtype=float)
     if R.ndim != 2 or R.shape[0] < 2 or R.shape[1] != J.shape[0]:
         raise ValueError(f"replicates must be (n >= 2, {J.shape[0]}), got {R.shape}")
-    lam, V, keep = _undetermined(J.T @ J)
-    D = (V[:, keep] / lam[keep]) @ V[:, keep].T @ J.T @ (R - R.mean(axis=0)).T
-    return _blank_undetermined(D @ D.T / (R.shape[0] * (R.shape[0] - 1)), V, keep)
+    C = np.zeros((R.shape[0], 0)) if closed_form is None else np.asarray(closed_form, dtype=float)
+    d_c = C - C.mean(axis=0)
+    c = d_c.shape[1]
+    dev = (R - R.mean(axis=0)) - d_c @ J[:, :c].T       # what the fitted parameters must explain
+    P, V, keep = _pseudo_inverse(J[:, c:])
+    D = np.hstack([d_c, dev @ P.T])
+    cov = D.T @ D / (R.shape[0] * (R.shape[0] - 1))
+    cov[c:, c:] = _blank_undetermined(cov[c:, c:], V, keep)
+    return cov
 
 
-def fit_standard_errors(curve: Callable[[dict], np.ndarray], params: dict, names: list[str],
-                        reference: np.ndarray, replicates: np.ndarray | None = None) -> dict | None:
-    """Standard errors of ln p of the parameters ``names`` fitted at ``params`` to the curve
-    ``reference``: from the replicates' scatter (sandwich) when there are two or more, from
-    the fit residual otherwise.  ``curve(p)`` returns the model force on the reference grid.
+def fit_standard_errors(curve: Callable[[dict], np.ndarray], params: dict, fitted: list[str],
+                        reference: np.ndarray, replicates: np.ndarray | None = None,
+                        closed_form: dict | None = None) -> dict | None:
+    """Standard errors of ln p of a calibration at ``params`` (None: not determined).
+
+    ``fitted``: the parameters found by least squares on the curve ``reference``;
+    ``closed_form``: name -> value on each replicate, for the parameters taken from a closed
+    form (eq. 3, eq. 13).  With two or more ``replicates`` (whose mean ``reference`` is,
+    on the same grid) the sandwich form, else the fit residual of the single curve (all of
+    ``fitted``; closed-form parameters then get none).  ``curve(p)`` returns the model
+    force on the reference grid.
 
     A fit on the boundary of the admissible set (a parameter driven to ~0, whose ln p no
-    longer moves the curve) has no linearised standard errors: all are infinite.  When a
-    perturbed simulation fails (RuntimeError, ArithmeticError), there are none: None."""
+    longer moves the curve) has no linearised standard errors: all are None.  When a
+    perturbed simulation fails (RuntimeError, ArithmeticError) or returns non-finite
+    forces, there are no errors at all: the result is None."""
+    closed_form = closed_form or {}
+    multi = replicates is not None and len(replicates) >= 2
+    cf_names = list(closed_form) if multi else []
+    names = cf_names + [n for n in fitted if n not in cf_names]
     try:
         J = log_sensitivities(curve, params, names)
     except (RuntimeError, ArithmeticError):
         return None
+    if not np.all(np.isfinite(J)):
+        return None
     norms = np.linalg.norm(J, axis=0)
     if norms.min() < BOUNDARY * norms.max():
-        return dict.fromkeys(names, float("inf"))
-    if replicates is not None and len(replicates) >= 2:
-        cov = replicate_log_covariance(J, replicates)
+        return dict.fromkeys(names, None)
+    if multi:
+        C = np.log(np.column_stack([closed_form[n] for n in cf_names])) if cf_names else None
+        cov = replicate_log_covariance(J, replicates, C)
     else:
         residual = np.asarray(reference, dtype=float) - np.asarray(curve(params))
         cov = log_covariance(J, residual_variance(residual, len(names)))
-    return {name: float(np.sqrt(v)) for name, v in zip(names, np.diag(cov))}
+    se = np.sqrt(np.diag(cov))
+    return {n: (float(v) if np.isfinite(v) else None) for n, v in zip(names, se)}

@@ -87,17 +87,18 @@ def data_section(summary: str, prepared_paths: list[Path], truth: dict) -> str:
 
 
 SE_NOTE = ('<p class="note">Standard error: how far the parameter could move for the scatter of '
-           'the measured replicates (or, for a single reference curve, the fit residual), from the '
-           'linearised least-squares problem (calibrate/uncertainty.py). "Not determined": the curve '
-           'fixes only a combination of this parameter with others, so its value, and its distance '
-           'from truth or paper, carries no information on its own.</p>')
+           'the measured replicates ({dof} degrees of freedom: a rough figure with few replicates), '
+           'closed-form parameters evaluated on each replicate, the others through the linearised '
+           'least-squares problem (calibrate/uncertainty.py). "Not determined": the curve fixes only '
+           'a combination of this parameter with others, or the fit sits on a bound, so its value, '
+           'and its distance from truth or paper, carries no information on its own. "n/a": a '
+           'perturbed simulation failed.</p>')
 
 
 def _standard_error(s_ln) -> str:
-    """A standard error of ln p as '+-x %'; 'not determined' where it exceeds 100 %."""
-    if s_ln is None:
-        return ""
-    if not math.isfinite(s_ln) or s_ln > 1.0:
+    """A standard error of ln p as '+-x %'; 'not determined' where there is none (None) or
+    it exceeds 100 % (a factor e either way)."""
+    if s_ln is None or not math.isfinite(s_ln) or s_ln > 1.0:
         return "not determined"
     return f"\u00b1{100.0 * s_ln:.2g} %"
 
@@ -111,8 +112,10 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
     label = "fitted" if fit.get("role", "calibration") == "calibration" else f"used ({fit['role']}, no refit)"
     rows = [[label] + [fit["parameters"][k] for k in names]]
     se = fit.get("standard_error")
-    if se:
-        rows.append(["standard error"] + [_standard_error(se.get(k)) for k in names])
+    shown = "standard_error" in fit and fit.get("reference") != "hifi"
+    if shown:
+        rows.append(["standard error"] + ([_standard_error(se[k]) if k in se else "" for k in names]
+                                          if se else ["n/a"] * len(names)))
     if truth:
         rows.append(["truth (synthetic)"] + [truth.get(k, "") for k in names])
     if paper:
@@ -123,7 +126,7 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
             f"||e||<sub>l2</sub> = {fit['error_l2']:.4g} N (relative {100 * fit['error_rel']:.2f} %), "
             f"{fit['nfev']} evaluations, {fit['wall_s']:.1f} s.{status}</p>"
             + _table(["", *names], rows)
-            + (SE_NOTE if se else ""))
+            + (SE_NOTE.format(dof=fit.get("standard_error_dof", "?")) if shown else ""))
     figs = [_img(plots.fit_figure(prepared, curve, title=fit["item"], reference=reference), f"fit {fit['item']}")]
     if ((fit_dir / "shapes.csv").exists() and prepared is not None
             and any("markers" in s for s in prepared.samples.values())):
@@ -152,7 +155,8 @@ def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth:
         blocks.append(fit_block(fit, path.parent, prepared, paper, tr, reference))
         se = fit.get("standard_error") or {}
         for k, v in fit["parameters"].items():
-            summary.append([fit["item"], k, v, _standard_error(se.get(k)), tr.get(k, "") if tr else "",
+            summary.append([fit["item"], k, v, _standard_error(se[k]) if k in se else "",
+                            tr.get(k, "") if tr else "",
                             paper.get(k, "") if paper else ""])
     table = _table(["item", "parameter", "recovered", "standard error", "truth", f"paper ({table_name})"],
                    summary)
@@ -364,15 +368,18 @@ def hifi_section(results: Path, cfg: dict, measured: dict) -> str:
 BRANCH_HIFI_AT = (5.0, 10.0, 25.0, 50.0)   # crosshead travels of the Fig. 18a comparison table
 
 
-def branch_hifi_section(results: Path) -> str:
+def branch_hifi_section(results: Path, cfg: dict) -> str:
     """The hi-fi Y harness beside the ROM and the in-plane test (Fig. 18a), with the cost of
-    each; a note naming the target when the hi-fi run (rule branch_hifi) is not part of this run."""
+    each; a note naming the target when the hi-fi run (rule branch_hifi) is not part of this
+    profile's run (a result left in the folder by another run is not shown: it may rest on
+    another profile's tensile fits)."""
     folder = Path(results) / "branch" / "hifi"
     summary = _read_json(folder / "summary.json")
-    if summary is None:
-        return ("<h3>Hi-fi Y harness beside the ROM (Fig. 18a)</h3><p class='note'>Not run in this "
-                "profile (config <code>branch.hifi.in_all</code>); <code>snakemake --cores 2 "
-                "branch_hifi_all</code> runs it.</p>")
+    if summary is None or cfg["profile"] not in cfg["branch"]["hifi"]["in_all"]:
+        return ("<h3>Hi-fi Y harness beside the ROM (Fig. 18a)</h3><p class='note'>Not part of "
+                f"the {html.escape(cfg['profile'])} profile's run (config <code>branch.hifi.in_all"
+                "</code>); <code>snakemake --cores 2 branch_hifi_all</code> runs it "
+                "(results/branch/hifi/).</p>")
     hifi = pd.read_csv(folder / "curve.csv")
     curves = {"hi-fi (mesoscale)": hifi}
     roms = {}
@@ -439,7 +446,7 @@ def build(out: Path, *, cfg: dict, results: Path, check_summary: Path,
         elif fits.get(stage):
             parts.append(stage_section(stage, fits[stage], results, cfg, truth, measured))
             if stage == "branch":
-                parts.append(branch_hifi_section(results))
+                parts.append(branch_hifi_section(results, cfg))
     page = ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
             "<title>harnesspipe report</title><style>" + CSS + "</style></head><body>"
             + "".join(parts) + "</body></html>\n")

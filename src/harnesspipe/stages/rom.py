@@ -45,6 +45,7 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
     grid, F_ref, test_id, source = reference_curve(reference, settings)
     t0 = time.perf_counter()
     result = rom_fit.fit(grid, F_ref, settings, log_path=outdir / "trace.h5")
+    wall_s = time.perf_counter() - t0
     replicates = source.replicates() if settings["reference"] == "measured" else None
     se = rom_fit.standard_errors(grid, F_ref, result.parameters, settings, replicates)
     curve, shapes = rom_fit.simulate(result.parameters, settings, return_shapes=True)
@@ -55,9 +56,12 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
                      parameters={k: result.parameters[k] for k in ("E", "sigma_y", "K", "n")},
                      error_l2=l2_error(F_ref, F_fit), error_rel=relative_l2_error(F_ref, F_fit),
                      nfev=result.result.nfev, converged=result.result.converged,
-                     wall_s=time.perf_counter() - t0, curve=curve,
-                     extra={"E_eq13": result.E_eq13, "sigma_y_eq13": result.sigma_y_eq13, "reference": settings["reference"], "standard_error": se,
-                            "fitted": list(settings["rom"]["simplex_parameters"])})
+                     wall_s=wall_s, curve=curve,
+                     extra={"E_eq13": result.E_eq13, "sigma_y_eq13": result.sigma_y_eq13,
+                            "reference": settings["reference"],
+                            "fitted": list(settings["rom"]["simplex_parameters"]),
+                            "standard_error": se,
+                            "standard_error_dof": None if replicates is None else len(replicates) - 1})
     title = f"{case}: ROM at fitted properties"
     if settings["reference"] == "hifi":
         fig = plots.hifi_rom_figure(source, curve, title=title, label="hi-fi virtual test")

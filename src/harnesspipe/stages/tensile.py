@@ -53,13 +53,22 @@ def fit_component(component: str, reference: Path, settings: dict, outdir: Path)
     def on_grid(p: dict) -> np.ndarray:
         c = simulate(p)
         return np.interp(ref.grid, c["displacement_mm"], c["force_N"])
-    extra["standard_error"] = fit_standard_errors(on_grid, params, list(TABLE2_COLUMNS[1:]), ref.mean,
-                                                  ref.replicates())
+    wall_s = time.perf_counter() - t0
+    replicates = ref.replicates()
+    fitted, closed_form = list(TABLE2_COLUMNS[1:]), {}
+    if component == "fabric_tube":           # eq. 3 on each replicate, then (K, n)
+        geom = tmodel.FabricGeometry()
+        regions = [tcal.linear_region(pd.DataFrame({"displacement_mm": ref.grid / scale, "force_N": Fk}),
+                                      geom.gauge, geom.area) for Fk in replicates]
+        closed_form = {"E": [r.E for r in regions], "sigma_y": [r.sigma_y for r in regions]}
+        fitted = ["K", "n"]
+    extra["standard_error"] = fit_standard_errors(on_grid, params, fitted, ref.mean, replicates, closed_form)
+    extra["standard_error_dof"] = len(replicates) - 1
     curve = simulate(params)
     F_fit = np.interp(ref.grid, curve["displacement_mm"], curve["force_N"])
     path = write_fit(outdir, stage="tensile", item=component, test_id=ref.test_id, parameters=params,
                      error_l2=l2_error(ref.mean, F_fit), error_rel=relative_l2_error(ref.mean, F_fit),
-                     nfev=fit.nfev, converged=fit.converged, wall_s=time.perf_counter() - t0,
+                     nfev=fit.nfev, converged=fit.converged, wall_s=wall_s,
                      curve=curve, extra=extra)
     plots.save(plots.fit_figure(ref, curve, title=f"{component}: tensile model at fitted values",
                                 xlabel="crosshead displacement [mm]", label="FE (fitted)"),
