@@ -122,9 +122,20 @@ def branch_hifi_settings():
     }, sort_keys=True)
 
 
+def branch_hifi_order(wc):
+    """Scheduling only: when this job and the hi-fi chain are both in this profile's `all`, start
+    after the chain's last two-thread fit (cohesive).  Ready together with the chain's first fit, this one-thread job took the core
+    a short job had just left while the two-thread fit waited for both -- 7.3 min of the default
+    run (bench/RESULTS.md).  ancient(): the fit's content or age never reruns this job."""
+    if "chain" in config["hifi"]["pipeline"]["in_all"] and config["profile"] in BRANCH_HIFI["in_all"]:
+        return {"after_chain_fits": ancient(f"{RES}/hifi/chain/cohesive/fit.json")}
+    return {}
+
+
 rule branch_hifi:
     """The mesoscale Y harness on the pull test (Fig. 18a): curve, energies, S2 shapes, cost."""
     input:
+        unpack(branch_hifi_order),
         table2=f"{RES}/tensile/table2.csv",
         warm=rules.hifi_warmup.output,
     output:
