@@ -135,3 +135,13 @@ def test_report_leaves_out_a_y_harness_run_of_another_profile(tmp_path):
     cfg = cfgmod.load(overrides={"profile": "quick"})
     text = branch_hifi_section(tmp_path, cfg)
     assert "Not part of the quick profile's run" in text and "branch_hifi_all" in text
+
+
+def test_report_says_when_the_y_harness_has_not_run_yet(tmp_path):
+    """Profile in branch.hifi.in_all but no summary (the report built before the run): the
+    section says so instead of claiming the run is not part of the profile."""
+    from harnesspipe import config as cfgmod
+    from harnesspipe.report.html import branch_hifi_section
+    cfg = cfgmod.load(overrides={"profile": "default"})
+    text = branch_hifi_section(tmp_path, cfg)
+    assert "Not run yet" in text and "Not part of" not in text and "branch_hifi_all" in text

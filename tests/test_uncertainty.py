@@ -121,3 +121,18 @@ def test_closed_form_parameter_is_taken_from_each_replicate():
 
 def quadratic_E(p):
     return p["E"] * U + p["b"] * U**2
+
+
+def test_degrees_of_freedom_follow_the_estimator():
+    """n - 1 for the mean of n >= 2 replicates, the curve's points less its fitted
+    parameters for a single curve (one specimen: the fit residual, not a replicate spread)."""
+    one = quadratic({"a": 0.7, "b": 0.01})[None, :]
+    assert unc.error_dof(U.size, ["a", "b"], np.vstack([one, one, one])) == 2
+    assert unc.error_dof(U.size, ["a", "b"], one) == U.size - 2
+    assert unc.error_dof(U.size, ["a", "b"]) == U.size - 2
+
+
+def test_a_curve_with_no_more_points_than_parameters_has_no_standard_errors():
+    u2 = U[:2]
+    line = lambda p: p["a"] * u2 + p["b"] * u2**2
+    assert unc.fit_standard_errors(line, {"a": 0.7, "b": 0.01}, ["a", "b"], 0.7 * u2) is None

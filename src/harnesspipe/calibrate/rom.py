@@ -73,6 +73,12 @@ def simulate(params: dict, settings: dict, return_shapes: bool = False):
                            **settings["mesh"])
 
 
+def simulate_on(u, params: dict, settings: dict) -> np.ndarray:
+    """ROM force of ``params`` on the deflection grid ``u``."""
+    curve = simulate(params, settings)
+    return np.interp(u, curve["deflection_mm"], curve["force_N"])
+
+
 def effective_modulus(u, F, settings) -> tuple[float, float]:
     """(E used by the model, E of eq. 13); they differ only with model_consistent_E."""
     span, r_o, rs = settings["three_point"]["span"], settings["r_o"], settings["rom"]
@@ -134,10 +140,9 @@ def fit(u, F, settings: dict, log_path=None) -> RomFit:
         if coords.hardening(x) is None:
             return np.inf  # outside the admissible set: rejected
         try:
-            curve = simulate(params_of(x), settings)
+            return l2_error(F, simulate_on(u, params_of(x), settings))
         except (RuntimeError, ArithmeticError):  # failed simulation: a rejected point, logged as NaN
             return np.nan
-        return l2_error(F, np.interp(u, curve["deflection_mm"], curve["force_N"]))
 
     x0 = coords.start(rs["initial_guess"]["K"], rs["initial_guess"]["n"])
     res = nelder_mead(objective, x0, coords.names, xatol=rs["simplex"]["xatol"],
@@ -147,30 +152,32 @@ def fit(u, F, settings: dict, log_path=None) -> RomFit:
     return RomFit(params_of(res.x), E_eq13, sigma_y_eq13, res)
 
 
-def standard_errors(u, F, params: dict, settings: dict, replicates) -> dict | None:
+def standard_errors(u, F, params: dict, settings: dict, replicates) -> tuple[dict | None, int | None]:
     """Standard errors of ln E, ln sigma_Y, ln K, ln n of a fit ``params`` to the mean F(u)
-    of the measured ``replicates`` (:func:`harnesspipe.calibrate.uncertainty.fit_standard_errors`):
-    E (and sigma_Y when the simplex does not fit it) by eq. 13 on each replicate -- E with
-    the fit's model-consistent factor --, the simplex's parameters by least squares.  None
+    of the measured ``replicates`` and their degrees of freedom
+    (:func:`harnesspipe.calibrate.uncertainty.fit_standard_errors`): with two or more
+    replicates E (and sigma_Y when the simplex does not fit it) by eq. 13 on each replicate
+    -- E with the fit's model-consistent factor --, the simplex's parameters by least
+    squares; with one, the simplex's parameters from the fit residual only.  (None, None)
     without replicates (a hi-fi reference is one deterministic curve: its residual is model
     error, not scatter)."""
     if replicates is None:
-        return None
+        return None, None
     u = np.asarray(u, dtype=float)
     span, r_o, rs = settings["three_point"]["span"], settings["r_o"], settings["rom"]
-
-    def eq13_modulus(force):
-        return eq13.modulus_from_slope(eq13.linear_part(u, force, span, rs["linear_window"])[0], span, r_o)
-    factor = params["E"] / eq13_modulus(F)
-    closed_form = {"E": [factor * eq13_modulus(Fk) for Fk in replicates]}
     fitted = ["K", "n"]
+    closed_form = {}
     if "sigma_y" in rs["simplex_parameters"]:
         fitted.insert(0, "sigma_y")
-    else:
+    elif len(replicates) >= 2:
         closed_form["sigma_y"] = [eq13.yield_stress(u, Fk, span, r_o, rs["yield_deflection"])
                                   for Fk in replicates]
+    if len(replicates) >= 2:
+        def eq13_modulus(force):
+            return eq13.effective_modulus(u, force, span, r_o, rs["linear_window"])
+        factor = params["E"] / eq13_modulus(F)
+        closed_form["E"] = [factor * eq13_modulus(Fk) for Fk in replicates]
 
-    def curve(p):
-        c = simulate(p, settings)
-        return np.interp(u, c["deflection_mm"], c["force_N"])
-    return uncertainty.fit_standard_errors(curve, params, fitted, F, replicates, closed_form)
+    se = uncertainty.fit_standard_errors(lambda p: simulate_on(u, p, settings), params, fitted, F,
+                                         replicates, closed_form)
+    return se, uncertainty.error_dof(len(u), fitted, replicates)

@@ -178,6 +178,17 @@ def calibrate_tube(component: str, measured: pd.DataFrame, *, initial: dict | No
     return dict(zip(PARAMETERS, material(fit.x))), fit
 
 
+def fabric_closed_form(displacement, replicates, geometry: FabricGeometry = FabricGeometry(),
+                       linear_fraction: float = 0.1, tol: float = 0.005) -> dict:
+    """E and sigma_y by eq. 3 (:func:`linear_region`, as in :func:`calibrate_fabric`) of each
+    replicate force curve on the ``displacement`` grid: {"E": [...], "sigma_y": [...]}.
+    Raises ValueError, as :func:`linear_region`, for a curve without a linear region."""
+    regions = [linear_region(pd.DataFrame({"displacement_mm": displacement, "force_N": F}),
+                             geometry.gauge, geometry.area, linear_fraction=linear_fraction, tol=tol)
+               for F in replicates]
+    return {"E": [r.E for r in regions], "sigma_y": [r.sigma_y for r in regions]}
+
+
 def calibrate_fabric(measured: pd.DataFrame, *, initial: dict | None = None,
                      geometry: FabricGeometry = FabricGeometry(), preset: str = "default",
                      nu: float | None = None, xatol: float = 1e-4, fatol: float = 1e-6,

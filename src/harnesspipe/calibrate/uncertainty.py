@@ -123,7 +123,8 @@ def fit_standard_errors(curve: Callable[[dict], np.ndarray], params: dict, fitte
     A fit on the boundary of the admissible set (a parameter driven to ~0, whose ln p no
     longer moves the curve) has no linearised standard errors: all are None.  When a
     perturbed simulation fails (RuntimeError, ArithmeticError) or returns non-finite
-    forces, there are no errors at all: the result is None."""
+    forces, or a single curve has no more points than parameters, there are no errors at
+    all: the result is None.  Their degrees of freedom: :func:`error_dof`."""
     closed_form = closed_form or {}
     multi = replicates is not None and len(replicates) >= 2
     cf_names = list(closed_form) if multi else []
@@ -141,7 +142,18 @@ def fit_standard_errors(curve: Callable[[dict], np.ndarray], params: dict, fitte
         C = np.log(np.column_stack([closed_form[n] for n in cf_names])) if cf_names else None
         cov = replicate_log_covariance(J, replicates, C)
     else:
-        residual = np.asarray(reference, dtype=float) - np.asarray(curve(params))
-        cov = log_covariance(J, residual_variance(residual, len(names)))
+        try:
+            residual = np.asarray(reference, dtype=float) - np.asarray(curve(params))
+            cov = log_covariance(J, residual_variance(residual, len(names)))
+        except (RuntimeError, ArithmeticError, ValueError):
+            return None
     se = np.sqrt(np.diag(cov))
     return {n: (float(v) if np.isfinite(v) else None) for n, v in zip(names, se)}
+
+
+def error_dof(n_points: int, fitted: list[str], replicates: np.ndarray | None = None) -> int:
+    """Degrees of freedom of the errors of :func:`fit_standard_errors`: n - 1 for the mean of
+    n >= 2 replicates, else the single curve's points less its fitted parameters."""
+    if replicates is not None and len(replicates) >= 2:
+        return len(replicates) - 1
+    return n_points - len(fitted)

@@ -103,6 +103,15 @@ def _standard_error(s_ln) -> str:
     return f"\u00b1{100.0 * s_ln:.2g} %"
 
 
+def _standard_error_cells(fit: dict, names) -> list[str]:
+    """The 'standard error' cells of a fit's parameters: 'n/a' when the fit has none (a hi-fi
+    reference, a failed perturbed run), '' for a parameter it does not list."""
+    se = fit.get("standard_error")
+    if not se:
+        return ["n/a"] * len(names)
+    return [_standard_error(se[k]) if k in se else "" for k in names]
+
+
 def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dict | None,
               reference: pd.DataFrame | None = None) -> str:
     """One fit: values beside truth and paper, the curve against the measured band (``prepared``,
@@ -111,11 +120,9 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
     names = list(fit["parameters"])
     label = "fitted" if fit.get("role", "calibration") == "calibration" else f"used ({fit['role']}, no refit)"
     rows = [[label] + [fit["parameters"][k] for k in names]]
-    se = fit.get("standard_error")
     shown = "standard_error" in fit and fit.get("reference") != "hifi"
     if shown:
-        rows.append(["standard error"] + ([_standard_error(se[k]) if k in se else "" for k in names]
-                                          if se else ["n/a"] * len(names)))
+        rows.append(["standard error"] + _standard_error_cells(fit, names))
     if truth:
         rows.append(["truth (synthetic)"] + [truth.get(k, "") for k in names])
     if paper:
@@ -153,10 +160,9 @@ def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth:
         paper = paper_values(cfg, stage, fit["item"])
         tr = truth.get(prepared.test_id if prepared is not None else fit["test_id"], {}).get("parameters")
         blocks.append(fit_block(fit, path.parent, prepared, paper, tr, reference))
-        se = fit.get("standard_error") or {}
-        for k, v in fit["parameters"].items():
-            summary.append([fit["item"], k, v, _standard_error(se[k]) if k in se else "",
-                            tr.get(k, "") if tr else "",
+        cells = _standard_error_cells(fit, list(fit["parameters"]))
+        for (k, v), cell in zip(fit["parameters"].items(), cells):
+            summary.append([fit["item"], k, v, cell, tr.get(k, "") if tr else "",
                             paper.get(k, "") if paper else ""])
     table = _table(["item", "parameter", "recovered", "standard error", "truth", f"paper ({table_name})"],
                    summary)
@@ -372,14 +378,17 @@ def branch_hifi_section(results: Path, cfg: dict) -> str:
     """The hi-fi Y harness beside the ROM and the in-plane test (Fig. 18a), with the cost of
     each; a note naming the target when the hi-fi run (rule branch_hifi) is not part of this
     profile's run (a result left in the folder by another run is not shown: it may rest on
-    another profile's tensile fits)."""
+    another profile's tensile fits) or has not run yet."""
     folder = Path(results) / "branch" / "hifi"
     summary = _read_json(folder / "summary.json")
-    if summary is None or cfg["profile"] not in cfg["branch"]["hifi"]["in_all"]:
-        return ("<h3>Hi-fi Y harness beside the ROM (Fig. 18a)</h3><p class='note'>Not part of "
-                f"the {html.escape(cfg['profile'])} profile's run (config <code>branch.hifi.in_all"
-                "</code>); <code>snakemake --cores 2 branch_hifi_all</code> runs it "
-                "(results/branch/hifi/).</p>")
+    head = "<h3>Hi-fi Y harness beside the ROM (Fig. 18a)</h3><p class='note'>"
+    run_it = ("<code>snakemake --cores 2 branch_hifi_all</code> runs it "
+              "(results/branch/hifi/).</p>")
+    if cfg["profile"] not in cfg["branch"]["hifi"]["in_all"]:
+        return (f"{head}Not part of the {html.escape(cfg['profile'])} profile's run (config "
+                f"<code>branch.hifi.in_all</code>); {run_it}")
+    if summary is None:
+        return f"{head}Not run yet: {run_it}"
     hifi = pd.read_csv(folder / "curve.csv")
     curves = {"hi-fi (mesoscale)": hifi}
     roms = {}

@@ -47,7 +47,7 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
     result = rom_fit.fit(grid, F_ref, settings, log_path=outdir / "trace.h5")
     wall_s = time.perf_counter() - t0
     replicates = source.replicates() if settings["reference"] == "measured" else None
-    se = rom_fit.standard_errors(grid, F_ref, result.parameters, settings, replicates)
+    se, se_dof = rom_fit.standard_errors(grid, F_ref, result.parameters, settings, replicates)
     curve, shapes = rom_fit.simulate(result.parameters, settings, return_shapes=True)
     curve = curve.rename(columns={"deflection_mm": "displacement_mm"})
     write_shapes(outdir, shapes)
@@ -61,7 +61,7 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
                             "reference": settings["reference"],
                             "fitted": list(settings["rom"]["simplex_parameters"]),
                             "standard_error": se,
-                            "standard_error_dof": None if replicates is None else len(replicates) - 1})
+                            "standard_error_dof": se_dof})
     title = f"{case}: ROM at fitted properties"
     if settings["reference"] == "hifi":
         fig = plots.hifi_rom_figure(source, curve, title=title, label="hi-fi virtual test")

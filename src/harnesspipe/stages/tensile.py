@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe.calibrate import tensile as tcal
-from harnesspipe.calibrate.uncertainty import fit_standard_errors
+from harnesspipe.calibrate.uncertainty import error_dof, fit_standard_errors
 from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
 from harnesspipe.models import tensile as tmodel
 from harnesspipe.report import plots
@@ -54,16 +54,7 @@ def fit_component(component: str, reference: Path, settings: dict, outdir: Path)
         c = simulate(p)
         return np.interp(ref.grid, c["displacement_mm"], c["force_N"])
     wall_s = time.perf_counter() - t0
-    replicates = ref.replicates()
-    fitted, closed_form = list(TABLE2_COLUMNS[1:]), {}
-    if component == "fabric_tube":           # eq. 3 on each replicate, then (K, n)
-        geom = tmodel.FabricGeometry()
-        regions = [tcal.linear_region(pd.DataFrame({"displacement_mm": ref.grid / scale, "force_N": Fk}),
-                                      geom.gauge, geom.area) for Fk in replicates]
-        closed_form = {"E": [r.E for r in regions], "sigma_y": [r.sigma_y for r in regions]}
-        fitted = ["K", "n"]
-    extra["standard_error"] = fit_standard_errors(on_grid, params, fitted, ref.mean, replicates, closed_form)
-    extra["standard_error_dof"] = len(replicates) - 1
+    extra.update(_standard_errors(component, on_grid, params, ref, measured["displacement_mm"]))
     curve = simulate(params)
     F_fit = np.interp(ref.grid, curve["displacement_mm"], curve["force_N"])
     path = write_fit(outdir, stage="tensile", item=component, test_id=ref.test_id, parameters=params,
@@ -74,6 +65,24 @@ def fit_component(component: str, reference: Path, settings: dict, outdir: Path)
                                 xlabel="crosshead displacement [mm]", label="FE (fitted)"),
                outdir / "fit.png")
     return read_fit(path)
+
+
+def _standard_errors(component: str, on_grid, params: dict, ref, displacement) -> dict:
+    """``standard_error`` and ``standard_error_dof`` of a fit (fit.json): the fabric's E and
+    sigma_Y by eq. 3 on each replicate (none when a replicate has no linear region), every
+    other parameter by least squares (:func:`fit_standard_errors`)."""
+    replicates = ref.replicates()
+    fitted, closed_form = list(TABLE2_COLUMNS[1:]), {}
+    if component == "fabric_tube":
+        fitted = ["K", "n"]
+        if len(replicates) >= 2:
+            try:
+                closed_form = tcal.fabric_closed_form(displacement, replicates)
+            except ValueError:
+                return {"standard_error": None, "standard_error_dof": None}
+    return {"standard_error": fit_standard_errors(on_grid, params, fitted, ref.mean, replicates,
+                                                  closed_form),
+            "standard_error_dof": error_dof(len(ref.grid), fitted, replicates)}
 
 
 def table2(fit_paths: list[Path], out_csv: Path) -> pd.DataFrame:
