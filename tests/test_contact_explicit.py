@@ -8,8 +8,8 @@ from scipy.optimize import minimize
 from harnesspipe.fe.cohesive import cohesive_dissipated_energy
 from harnesspipe.fe.contact_explicit import (
     beam_beam_contact, cohesive_tie_dissipation, cohesive_ties_quad,
-    WW_POINTS, chain_cylinder_contact, fit_slot_history, make_ties, new_slot_history, node_cylinder_contact,
-    near_node_facet_pairs, node_facet_contact)
+    SOFTMIN_TAU, WW_POINTS, chain_cylinder_contact, facets_cylinder_contact, facets_cylinder_gaps,
+    fit_slot_history, make_ties, new_slot_history, near_node_facet_pairs, node_facet_contact)
 from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
                                          quad_aabbs, segment_aabbs, segment_distance)
 
@@ -277,45 +277,154 @@ def test_slot_history_grows_to_every_candidate_partner():
 
 
 # ---------------------------------------------------------------- node on rigid cylinder
-def test_node_on_cylinder_stick_slip_energy_and_reaction():
-    Rc, r, pen, k_n, k_t = 2.5, R_W, 0.02, 500.0, 300.0
-    N = k_n * pen
-    mu = np.array([0.3, 0.1])
-    # two nodes on the roller top, along its axis, with different mu
-    x = np.array([[0.0, Rc + r - pen, 0.0], [0.0, Rc + r - pen, 5.0]])
-    nodes = np.array([0, 1])
-    cyl = dict(cyl_c=np.zeros((1, 3)), cyl_axis=np.array([[0.0, 0, 1]]), cyl_R=np.array([Rc]),
-               cyl_half_len=np.array([np.inf]), cyl_v=np.zeros((1, 3)))
-    hist = np.zeros((2, 1, 3))
-    dt, V = 1e-3, 1.0                      # nodes slide along the axis (gap unchanged)
-    v = _z(2)
+def _tube(n_c, n_x, h, a, phase=0.0):
+    """Cylindrical quad mesh of radius ``a`` along x: n_c x n_x quads of axial length h,
+    node lines at x = -n_x h / 2 + i h, first node line at the angle ``phase`` from +y."""
+    th = 2 * np.pi * np.arange(n_c) / n_c + phase
+    xs = (np.arange(n_x + 1) - n_x / 2) * h
+    x = np.array([[xi, a * np.cos(tt), a * np.sin(tt)] for xi in xs for tt in th])
+    quads = np.array([[i * n_c + j, (i + 1) * n_c + j, (i + 1) * n_c + (j + 1) % n_c,
+                       i * n_c + (j + 1) % n_c] for i in range(n_x) for j in range(n_c)])
+    return x, quads
+
+
+def _pin_hist(maxs=4):
+    return np.full((1, maxs), -1, dtype=np.int64), np.zeros((1, maxs, 3))
+
+
+def _pin_facets(x, v, quads, t, hist, c, k_n=100.0, k_t=0.0, mu=0.3, dt=1e-3, Rc=2.5):
+    fn, ft, fc = _z(len(x)), _z(len(x)), np.zeros((1, 3))
+    n = facets_cylinder_contact(x, v, quads, np.full(len(quads), t), mu, np.array([c], float),
+                                np.array([[0.0, 0, 1]]), np.array([Rc]), np.zeros(1),
+                                np.zeros((1, 3)), k_n, k_t, dt, hist[0], hist[1], fn, ft, fc)
+    return n, fn, ft, fc
+
+
+def _soft_gap(x, quads, t, c, Rc):
+    """The patch gap by its definition: every quad's smallest distance to the pin's axis (z)
+    on a fine (xi, eta) grid, less R + t/2, then their soft minimum (LogSumExp)."""
+    u = np.linspace(-1.0, 1.0, 201)
+    XI, ETA = np.meshgrid(u, u, indexing="ij")
+    N = 0.25 * np.stack([(1 - XI) * (1 - ETA), (1 + XI) * (1 - ETA), (1 + XI) * (1 + ETA),
+                         (1 - XI) * (1 + ETA)], axis=-1)
+    g = np.array([np.min(np.hypot(*(N @ x[q][:, :2] - c[:2]).transpose(2, 0, 1))) for q in quads])
+    g -= Rc + t / 2
+    return g.min() - SOFTMIN_TAU * np.log(np.sum(np.exp(-(g - g.min()) / SOFTMIN_TAU)))
+
+
+@pytest.mark.parametrize("phase", [0.0, np.pi / 16])
+def test_tube_on_a_pin_is_held_wherever_its_node_lines_fall(phase):
+    """A tube (radius 6.2, 16 x 3.2 mm quads, wall 1.7) across a 5 mm pin: the pin meets the
+    faceted mid-surface where it comes closest, so the force does not depend on where the
+    pin falls between the node lines (nodes alone: the pin would sink 0.6 mm between them),
+    and the gap is that of the facets -- a node line at the bottom (phase 0) or the
+    chord's middle 6.2 (1 - cos(pi / 16)) higher (phase pi / 16) -- softened by the soft
+    minimum over the quads near the closest point (a few tau).  The force is k (-G) with G
+    the soft minimum by its definition; reaction = -sum of nodal forces."""
+    a, t, Rc, pen, k_n = 6.2, 1.7, 2.5, 0.01, 100.0
+    x, quads = _tube(16, 8, 3.2, a, phase)
+    bottom = a * math.cos(math.pi / 16) if phase else a
+    for xc in (0.0, 0.4, 0.8, 1.6):
+        c = np.array([xc, -bottom - t / 2 - Rc + pen, 0.0])
+        n, fn, _, fc = _pin_facets(x, _z(len(x)), quads, t, _pin_hist(), c, k_n=k_n)
+        assert n == 1
+        G = _soft_gap(x, quads, t, c, Rc)
+        assert fn[:, 1].sum() == pytest.approx(-k_n * G, rel=2e-3)  # grid
+        assert facets_cylinder_gaps(x, quads, np.full(len(quads), t), c[None, :],
+                                    np.array([[0.0, 0, 1]]), np.array([Rc]))[0] == pytest.approx(G, rel=2e-3)
+        assert k_n * pen < fn[:, 1].sum() < k_n * (pen + 3.0 * SOFTMIN_TAU)
+        # the soft minimum spreads the contact over ~sqrt(2 a tau) = 0.35 mm along the tube:
+        # a small axial part where the pin is off a node ring, none across (z)
+        assert abs(fn[:, 0].sum()) < 0.02 * fn[:, 1].sum() and abs(fn[:, 2].sum()) < 1e-9
+        assert np.allclose(fc[0], -fn[:, :3].sum(axis=0))
+    # midway between node lines no node reaches the pin: node contact would see nothing
+    assert np.min(np.hypot(x[:, 0] - 1.6, x[:, 1] - c[1]) - Rc - t / 2) > 0.0
+
+
+def test_each_lip_of_an_open_tube_meets_the_pin():
+    """An open tube with its cut under the pin (seam nodes duplicated): the two lips are two
+    patches, each held at its own closest point -- together the same force as a closed
+    tube, split evenly -- not one lip alone."""
+    a, t, Rc, pen, k_n = 6.2, 1.7, 2.5, 0.01, 100.0
+    n_c, j_b = 16, 4
+    x, quads = _tube(n_c, 8, 3.2, a, np.pi / 2)        # node line j_b = 4 at the bottom
+    seam = np.arange(j_b, len(x), n_c)
+    twin = len(x) + np.arange(seam.size)
+    x = np.vstack([x, x[seam]])                         # the cut: seam nodes duplicated
+    far = np.any(quads % n_c == j_b + 1, axis=1)        # the quads on one side of the seam
+    for old, new in zip(seam, twin):
+        rows = far & (quads == old).any(axis=1)
+        quads[rows] = np.where(quads[rows] == old, new, quads[rows])
+    c = [1.0, -a - t / 2 - Rc + pen, 0.0]
+    n, fn, _, fc = _pin_facets(x, _z(len(x)), quads, t, _pin_hist(), c, k_n=k_n)
+    assert n == 2
+    assert fn[:, 1].sum() == pytest.approx(2 * k_n * pen, rel=1e-6)   # one quad per lip at its edge
+    assert fn[seam, 1].sum() == pytest.approx(fn[twin, 1].sum(), rel=1e-9)
+
+
+def test_facets_sliding_over_a_pin_make_no_energy():
+    """A tube with a dent pressed onto a pin and slid along its axis over the pin and back:
+    the normal forces do no net work over the closed path (the facets' distance to the axis
+    is a potential, across quads and node lines), while they do work on each half."""
+    a, t, Rc, k_n = 6.2, 1.7, 2.5, 500.0
+    x0, quads = _tube(12, 10, 3.0, a, 0.1)
+    x0[:, 1] -= 0.15 * np.exp(-(x0[:, 0] / 4.0) ** 2) * (x0[:, 1] < 0)    # a dent at x = 0
+    hist = _pin_hist()
+    c = [0.0, -a - t / 2 - Rc + 0.2, 0.0]
+    path = np.r_[np.linspace(-7.0, 0.0, 3001), np.linspace(0.0, -7.0, 3001)[1:]]
+    W = 0.0
+    W_half = 0.0
+    f_prev = None
+    for i, ox in enumerate(path):
+        x = x0.copy()
+        x[:, 0] += ox
+        _, fn, _, _ = _pin_facets(x, _z(len(x)), quads, t, hist, c, k_n=k_n)
+        if f_prev is not None:
+            W += 0.5 * (fn[:, 0] + f_prev).sum() * (ox - path[i - 1])
+        f_prev = fn[:, 0].copy()
+        if i == 3000:
+            W_half = W
+    assert abs(W_half) > 0.1                           # N mm: the contact stores and returns energy
+    assert abs(W) < 1e-3 * abs(W_half)
+
+
+def test_facets_on_a_pin_stick_slip_energy_and_reaction():
+    """A flat plate (2 x 2 quads) pressed onto a pin and slid along the pin's axis (gap
+    unchanged): elastic stick k_t dg, then slip at mu N against the motion; dissipation
+    mu N (distance - mu N / k_t); history cleared when the plate leaves the pin.  The pin
+    lies under the plate's middle node line, which all four quads reach: the soft minimum
+    adds tau ln 4 to the penetration."""
+    Rc, t, pen, k_n, k_t, mu, dt, V = 2.5, 0.27, 0.02, 500.0, 300.0, 0.3, 1e-3, 1.0
+    N = k_n * (pen + SOFTMIN_TAU * math.log(4))
+    xp, quads = _plate(2, 4.0)
+    xp = xp[:, [0, 2, 1]]                              # plate in the xz plane
+    xp[:, 1] = Rc + t / 2 - pen
+    hist = _pin_hist()
+    v = _z(len(xp))
     v[:, 2] = V
-    W = np.zeros(2)
+    W = 0.0
     dist = 0.0
-    f_prev = np.zeros(2)
+    f_prev = 0.0
+    x = xp.copy()
     for step in range(200):
         x[:, 2] += V * dt
         dist += V * dt
-        fn, ft, fc = _z(2), _z(2), np.zeros((1, 3))
-        n = node_cylinder_contact(x, v, nodes, np.full(2, r), mu, k_n=k_n, k_t=k_t, dt=dt,
-                                  hist_ft=hist, f_n=fn, f_t=ft, f_cyl=fc, **cyl)
-        assert n == 2
-        W += 0.5 * (f_prev + ft[:, 2]) * V * dt           # work of f_t (trapezoid)
-        f_prev = ft[:, 2].copy()
-        if step == 0:      # stick: elastic tangential force k_t * displacement < mu N
-            assert np.allclose(ft[:, 2], -k_t * V * dt)
-    assert np.allclose(ft[:, 2], -mu * N)                       # slip: mu N against motion
-    assert np.allclose(fn[:, 1], N)
-    assert np.allclose(fc[0], -(fn + ft)[:, :3].sum(axis=0))    # reaction on the cylinder
-    # dissipated = -work of friction - elastic energy still stored = mu N (dist - mu N / k_t)
+        n, fn, ft, fc = _pin_facets(x, v, quads, t, hist, [0.0, 0.0, 0.0], k_n=k_n, k_t=k_t,
+                                    mu=mu, dt=dt)
+        assert n == 1
+        f_now = ft[:, 2].sum()
+        W += 0.5 * (f_prev + f_now) * V * dt
+        f_prev = f_now
+        if step == 0:
+            assert f_now == pytest.approx(-k_t * V * dt)
+    assert f_now == pytest.approx(-mu * N)
+    assert fn[:, 1].sum() == pytest.approx(N)
+    assert np.allclose(fc[0], -(fn + ft)[:, :3].sum(axis=0))
     stored = (mu * N) ** 2 / (2 * k_t)
     assert -W - stored == pytest.approx(mu * N * (dist - mu * N / k_t), rel=2e-3)
-    # out of reach / beyond the roller's length: nothing, and history is cleared
     x[:, 1] += 1.0
-    fn, ft, fc = _z(2), _z(2), np.zeros((1, 3))
-    assert node_cylinder_contact(x, v, nodes, np.full(2, r), mu, k_n=k_n, k_t=k_t, dt=dt,
-                                 hist_ft=hist, f_n=fn, f_t=ft, f_cyl=fc, **cyl) == 0
-    assert not hist.any() and not fn.any() and not fc.any()
+    n, fn, ft, fc = _pin_facets(x, v, quads, t, hist, [0.0, 0.0, 0.0], k_n=k_n, k_t=k_t, mu=mu)
+    assert n == 0 and np.all(hist[0] == -1) and not hist[1].any() and not fn.any() and not fc.any()
 
 
 # -------------------------------------------------------------------- node on shell facet
@@ -366,11 +475,7 @@ def test_wire_resting_on_a_roller_between_its_nodes_is_held():
     assert fn[:, 1].sum() == pytest.approx(k_n * pen, rel=1e-9)
     assert fn[1, 1] == pytest.approx(0.35 * k_n * pen) and fn[2, 1] == pytest.approx(0.65 * k_n * pen)
     assert np.allclose(fc[0], -fn[:, :3].sum(axis=0))
-    nodes_only = node_cylinder_contact(x, _z(4), np.arange(4), np.full(4, R_W), np.full(4, 0.3),
-                                       np.zeros((1, 3)), np.array([[0.0, 0, 1]]), np.array([Rc]),
-                                       np.array([np.inf]), np.zeros((1, 3)), k_n, 0.0, 1e-3,
-                                       np.zeros((4, 1, 3)), _z(4), _z(4), np.zeros((1, 3)))
-    assert nodes_only == 0
+    assert np.all(np.hypot(x[:, 0], x[:, 1]) > Rc + R_W)      # no node reaches the roller
 
 
 def test_bent_wire_sliding_over_a_roller_makes_no_energy():

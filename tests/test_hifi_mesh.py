@@ -263,7 +263,8 @@ def test_open_tube_cut(meshes):
     assert pairs.shape == (RES["tube_axial"] + 1, 2)
     np.testing.assert_allclose(opened.X[pairs[:, 0]], opened.X[pairs[:, 1]])   # duplicated
     assert np.all(pairs[:, 0] != pairs[:, 1])
-    np.testing.assert_allclose(opened.X[pairs[:, 0], 1], 6.2)                    # at the top
+    np.testing.assert_allclose(opened.X[pairs[:, 0], 1:], [[0.0, -6.2]] * len(pairs),   # at the side
+                               atol=1e-12)
     tube = opened.shell_conn[opened.shell_part == PART_TUBE]
     for a, b in pairs:                                                          # no element bridges it
         assert not np.any(np.isin(a, tube) & np.any(tube == b, axis=1) & np.any(tube == a, axis=1))
@@ -315,6 +316,8 @@ def test_default_resolution_and_options(config):
     case = config["cases"]["cwb19_t2_open_coarse"]
     m = build_mesh(case, config, "default")
     assert 900 <= m.beam_conn.shape[0] <= 1100 and m.shell_conn.shape[0] <= 900
+    top = build_mesh(case, config, {**RES, "cut_at": "top"})
+    np.testing.assert_allclose(top.X[top.cut_pairs[:, 0], 1], 6.2)
     bottom = build_mesh(case, config, {**RES, "cut_at": "bottom"})
     np.testing.assert_allclose(bottom.X[bottom.cut_pairs[:, 0], 1], -6.2)
     wires = build_mesh(case, config, {**RES, "end_tape": "wires"})

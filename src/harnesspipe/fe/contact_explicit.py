@@ -3,10 +3,12 @@
 Interactions of the 3-point bending model of a wire bundle (eqs. 6-10):
 
 (a) ``beam_beam_contact``     wire-wire, penalty normal + eq. 6 friction;
-(b) ``node_cylinder_contact`` nodes against rigid cylinders (rollers, loading pin),
-                              constant-mu Coulomb per node, reaction on each cylinder;
-    ``chain_cylinder_contact`` beam chains (wires) against the same cylinders: one
-                              contact per (wire, cylinder) at the wire's closest point;
+(b) ``chain_cylinder_contact`` beam chains (wires) against rigid cylinders (rollers,
+                              loading pin): one contact per (wire, cylinder) at the wire's
+                              closest point, constant-mu Coulomb, reaction on each cylinder;
+    ``facets_cylinder_contact`` a set of shell quads (tube, tape) against the same
+                              cylinders: one contact per (connected patch, cylinder) at the
+                              facets' closest point;
 (c) ``node_facet_contact``    nodes (wires) against shell quads (tube, tape), one-sided,
                               eq. 6 friction;
 (d) ``cohesive_ties_quad`` / ``cohesive_ties_beam``  tape bonded to the tube / the wires by
@@ -68,6 +70,9 @@ CHUNK = 64              # items per parallel task (scratch arrays are allocated 
 SERIAL_MAX_CHUNKS = 2   # up to this many tasks a loop runs serially (no parallel-region cost)
 ENTRY_FRACTION = 0.05    # node-facet: a contact begins at most this far (x (r + t/2)) inside the surface
 REJECT_TOL = 1e-9       # relative slack of the early distance rejects (round-off of the points)
+LM_DAMP = 1e-9          # facet-to-axis projection: Levenberg term (x trace) for facets parallel to a pin
+PATCH_REACH = 1.0       # facets within this x R of a pin's surface form its contact patches
+SOFTMIN_TAU = 0.01      # mm: width of the soft minimum of a patch's facet gaps (pin contact)
 
 
 def new_slot_history(n_owner, maxs=DEFAULT_MAXS, points=1):
@@ -181,12 +186,12 @@ def _free_slot(hist_partner, owner):
 
 
 @njit(cache=True)
-def _quad_eval(x, quads, q, xi, eta, X, n, e1):
-    """Point X, unit normal n = unit(X_xi x X_eta), unit tangent e1 = unit(X_xi) (written)."""
+def _quad_tangents(x, quads, q, xi, eta, X, X_xi, X_eta):
+    """Point X and tangents X_xi, X_eta of the bilinear quad q at (xi, eta) (written)."""
     for k in range(3):
         X[k] = 0.0
-        n[k] = 0.0
-        e1[k] = 0.0
+        X_xi[k] = 0.0
+        X_eta[k] = 0.0
     for m in range(4):
         sx = -1.0 if (m == 0 or m == 3) else 1.0
         se = -1.0 if (m == 0 or m == 1) else 1.0
@@ -196,8 +201,14 @@ def _quad_eval(x, quads, q, xi, eta, X, n, e1):
         for k in range(3):
             c = x[quads[q, m], k]
             X[k] += Nm * c
-            e1[k] += dx * c
-            n[k] += de * c          # X_eta kept in n for now
+            X_xi[k] += dx * c
+            X_eta[k] += de * c
+
+
+@njit(cache=True)
+def _quad_eval(x, quads, q, xi, eta, X, n, e1):
+    """Point X, unit normal n = unit(X_xi x X_eta), unit tangent e1 = unit(X_xi) (written)."""
+    _quad_tangents(x, quads, q, xi, eta, X, e1, n)    # X_eta kept in n for now
     c0 = e1[1] * n[2] - e1[2] * n[1]
     c1 = e1[2] * n[0] - e1[0] * n[2]
     c2 = e1[0] * n[1] - e1[1] * n[0]
@@ -663,105 +674,7 @@ def _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k
                 hnew[j, 0, c] = 0.5 * (hnew[j, 1, c] + hnew[j, 2, c])
 
 
-# -------------------------------------------------------- (b) nodes on rigid cylinders
-@njit(cache=True, parallel=True)
-def node_cylinder_contact(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, cyl_half_len,
-                          cyl_v, k_n, k_t, dt, hist_ft, f_n, f_t, f_cyl):
-    """Penalty contact of nodes (spheres of radius ``node_r``) with rigid cylinders, Coulomb.
-
-    Parameters
-    ----------
-    x, v : (n_nodes, 3+) positions, half-step velocities.
-    nodes : (n_cn,) UNIQUE node ids tested; node_r : (n_cn,) contact radius of each
-        (wire radius for beam nodes, half thickness for shell nodes);
-    node_mu : (n_cn,) friction coefficient per node (e.g. mu_rtb on tube nodes, mu_rtp on
-        tape nodes; constant Coulomb, no eq. 6).
-    cyl_c : (n_cyl, 3) current point of each axis (centre); cyl_axis : (n_cyl, 3) unit axes;
-    cyl_R : (n_cyl,) radii; cyl_half_len : (n_cyl,) half lengths about ``cyl_c`` along the
-        axis (np.inf for unbounded); cyl_v : (n_cyl, 3) rigid translational velocities.
-    k_n, k_t : normal and tangential penalties (N/mm); k_t = 0 disables friction.
-    dt : solver step.
-    hist_ft : (n_cn, n_cyl, 3) committed friction force per (node, cylinder), in place
-        (zeros to start; reset to zero when the node leaves the cylinder).
-    f_n, f_t : (n_nodes, 3+) outputs (ADDED); f_cyl : (n_cyl, 3) output, total force ON
-        each cylinder (normal + friction) ADDED (the loading pin reaction).
-
-    Gap ``|radial distance to the axis| - R - r``; normal radial from the axis.
-    Returns the number of active (node, cylinder) contacts.
-    """
-    n_cn = nodes.shape[0]
-    n_cyl = cyl_c.shape[0]
-    work = np.zeros((n_cn, n_cyl, 3))
-    count = np.zeros(n_cn, dtype=np.int64)
-    n_chunks = (n_cn + CHUNK - 1) // CHUNK
-    if n_chunks <= SERIAL_MAX_CHUNKS:
-        _cyl_range(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, cyl_half_len, cyl_v,
-                   k_n, k_t, dt, hist_ft, f_n, f_t, work, count, 0, n_cn)
-    else:
-        for ch in prange(n_chunks):
-            _cyl_range(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, cyl_half_len,
-                       cyl_v, k_n, k_t, dt, hist_ft, f_n, f_t, work, count, ch * CHUNK,
-                       min(n_cn, (ch + 1) * CHUNK))
-    n_active = 0
-    for i in range(n_cn):
-        n_active += count[i]
-        for c in range(n_cyl):
-            for k in range(3):
-                f_cyl[c, k] += work[i, c, k]
-    return n_active
-
-
-@njit(cache=True)
-def _cyl_range(x, v, nodes, node_r, node_mu, cyl_c, cyl_axis, cyl_R, cyl_half_len, cyl_v, k_n,
-               k_t, dt, hist_ft, f_n, f_t, work, count, i0, i1):
-    """Nodes i0..i1-1 of :func:`node_cylinder_contact` (nodes are unique: no races)."""
-    n_cyl = cyl_c.shape[0]
-    scr = np.zeros((5, 3))
-    for i in range(i0, i1):
-        nd = nodes[i]
-        nv = scr[0]
-        dg = scr[1]
-        fold = scr[2]
-        ds = scr[3]
-        fnew = scr[4]
-        for c in range(n_cyl):
-            ax0 = cyl_axis[c, 0]
-            ax1 = cyl_axis[c, 1]
-            ax2 = cyl_axis[c, 2]
-            d0 = x[nd, 0] - cyl_c[c, 0]
-            d1 = x[nd, 1] - cyl_c[c, 1]
-            d2 = x[nd, 2] - cyl_c[c, 2]
-            al = d0 * ax0 + d1 * ax1 + d2 * ax2
-            inside = abs(al) <= cyl_half_len[c]
-            nv[0] = d0 - al * ax0
-            nv[1] = d1 - al * ax1
-            nv[2] = d2 - al * ax2
-            dist = math.sqrt(_dot(nv, nv))
-            gap = dist - cyl_R[c] - node_r[i]
-            if (not inside) or gap >= 0.0 or dist <= 0.0:
-                for k in range(3):
-                    hist_ft[i, c, k] = 0.0
-                continue
-            count[i] += 1
-            for k in range(3):
-                nv[k] /= dist
-            pn = -k_n * gap
-            for k in range(3):
-                f_n[nd, k] += pn * nv[k]
-                work[i, c, k] -= pn * nv[k]
-            if k_t <= 0.0 or node_mu[i] <= 0.0:
-                continue
-            for k in range(3):
-                fold[k] = hist_ft[i, c, k]
-                dg[k] = dt * (v[nd, k] - cyl_v[c, k])
-            _to_tangent_plane(fold, dg, nv)
-            coulomb_return_map(fold, dg, k_t, node_mu[i], pn, fnew, ds)
-            for k in range(3):
-                hist_ft[i, c, k] = fnew[k]
-                f_t[nd, k] -= fnew[k]
-                work[i, c, k] += fnew[k]
-
-
+# ------------------------------------------- (b) wires and shell facets on rigid cylinders
 @njit(cache=True)
 def _chain_closest(x, seg, seg_r, e0, e1, c0, ax, R):
     """Closest point of the segments e0..e1-1 of a chain to the axis line (point ``c0``,
@@ -797,7 +710,7 @@ def chain_cylinder_contact(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, c
     """Penalty contact of beam chains (wires) with rigid unbounded cylinders, Coulomb friction.
 
     A wire meets a 5 mm pin over a few millimetres, less than its element length: nodes
-    alone (:func:`node_cylinder_contact`) let a wire whose nodes straddle a roller fall
+    alone (spheres at the nodes) let a wire whose nodes straddle a roller fall
     through it.  Here each chain (the segments ``chain_start[w] .. chain_start[w + 1] - 1``
     of ``seg``, consecutive along the wire) touches each cylinder at most once, at the point
     of the chain closest to the cylinder's axis: gap ``g = min over the chain of (distance
@@ -856,6 +769,301 @@ def chain_cylinder_contact(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, c
                 f_t[b, k] -= s * fnew[k]
                 f_cyl[c, k] += fnew[k]
     return n_active
+
+
+@njit(cache=True)
+def _quad_axis_closest(x, quads, q, c0, ax, out):
+    """Point of the bilinear quad ``q`` closest to the axis line (point ``c0``, unit ``ax``).
+
+    Minimises f = 1/2 |P (X(xi, eta) - c0)|^2, P = I - ax ax^T, over [-1, 1]^2 by projected
+    Gauss-Newton: a coordinate on its bound whose gradient points outwards is held there
+    and the other one solved alone (active set).  A quad with a direction along the axis
+    (a facet parallel to the pin) has a line of minimisers; the Levenberg term
+    ``LM_DAMP trace`` keeps the iterate at the point of that line nearest the previous
+    iterate (the quad's centre line), with no effect on the distance.
+    Writes out = (xi, eta, dist, n(3)), n the unit radial vector from the axis.
+    """
+    xi = 0.0
+    eta = 0.0
+    X = np.empty(3)
+    tx = np.empty(3)
+    te = np.empty(3)
+    for it in range(12):
+        _quad_tangents(x, quads, q, xi, eta, X, tx, te)
+        rl = (X[0] - c0[0]) * ax[0] + (X[1] - c0[1]) * ax[1] + (X[2] - c0[2]) * ax[2]
+        xl = _dot(tx, ax)
+        el = _dot(te, ax)
+        for k in range(3):
+            X[k] -= c0[k] + rl * ax[k]          # radial offset P (X - c0)
+            tx[k] -= xl * ax[k]                 # P X_xi
+            te[k] -= el * ax[k]                 # P X_eta
+        if it == 11:
+            break
+        g0 = _dot(tx, X)
+        g1 = _dot(te, X)
+        A = _dot(tx, tx)
+        B = _dot(tx, te)
+        C = _dot(te, te)
+        lam = LM_DAMP * (A + C) + 1e-300
+        A += lam
+        C += lam
+        hold_xi = (xi <= -1.0 and g0 > 0.0) or (xi >= 1.0 and g0 < 0.0)
+        hold_eta = (eta <= -1.0 and g1 > 0.0) or (eta >= 1.0 and g1 < 0.0)
+        dxi = 0.0
+        deta = 0.0
+        if not hold_xi and not hold_eta:
+            det = A * C - B * B
+            dxi = -(C * g0 - B * g1) / det
+            deta = -(A * g1 - B * g0) / det
+        elif not hold_xi:
+            dxi = -g0 / A
+        elif not hold_eta:
+            deta = -g1 / C
+        xi_new = min(1.0, max(-1.0, xi + dxi))
+        eta_new = min(1.0, max(-1.0, eta + deta))
+        step = abs(xi_new - xi) + abs(eta_new - eta)
+        xi = xi_new
+        eta = eta_new
+        if step < 1e-12:
+            break
+    dist = math.sqrt(_dot(X, X))
+    out[0] = xi
+    out[1] = eta
+    out[2] = dist
+    for k in range(3):
+        out[3 + k] = X[k] / dist if dist > 0.0 else 0.0
+
+
+@njit(cache=True)
+def _facets_near(x, quads, quad_t, c0, ax, R, cand, prj_all):
+    """Quads of the set whose mid-surface comes within ``PATCH_REACH R`` of the cylinder
+    (c0, ax, R) (gap = distance to the axis - R - t/2 < PATCH_REACH R): their ids into
+    ``cand``, their closest points (:func:`_quad_axis_closest`) into ``prj_all[:, :6]`` and
+    gaps into ``prj_all[:, 6]``; returns their number.  A quad whose bounding sphere stays
+    farther is not projected."""
+    m = 0
+    prj = np.empty(6)
+    for q in range(quads.shape[0]):
+        cx = 0.25 * (x[quads[q, 0], 0] + x[quads[q, 1], 0] + x[quads[q, 2], 0] + x[quads[q, 3], 0])
+        cy = 0.25 * (x[quads[q, 0], 1] + x[quads[q, 1], 1] + x[quads[q, 2], 1] + x[quads[q, 3], 1])
+        cz = 0.25 * (x[quads[q, 0], 2] + x[quads[q, 1], 2] + x[quads[q, 2], 2] + x[quads[q, 3], 2])
+        rho2 = 0.0
+        for k in range(4):
+            d2 = ((x[quads[q, k], 0] - cx) ** 2 + (x[quads[q, k], 1] - cy) ** 2
+                  + (x[quads[q, k], 2] - cz) ** 2)
+            rho2 = max(rho2, d2)
+        dl = (cx - c0[0]) * ax[0] + (cy - c0[1]) * ax[1] + (cz - c0[2]) * ax[2]
+        r0 = cx - c0[0] - dl * ax[0]
+        r1 = cy - c0[1] - dl * ax[1]
+        r2 = cz - c0[2] - dl * ax[2]
+        reach = (1.0 + PATCH_REACH) * R + 0.5 * quad_t[q]
+        if math.sqrt(r0 * r0 + r1 * r1 + r2 * r2) - math.sqrt(rho2) >= reach:
+            continue
+        _quad_axis_closest(x, quads, q, c0, ax, prj)
+        gap = prj[2] - R - 0.5 * quad_t[q]
+        if gap < PATCH_REACH * R and prj[2] > 0.0:
+            cand[m] = q
+            for k in range(6):
+                prj_all[m, k] = prj[k]
+            prj_all[m, 6] = gap
+            m += 1
+    return m
+
+
+@njit(cache=True)
+def _patches(quads, cand, m, patch):
+    """Connected patches of the quads cand[:m] near a pin (quads sharing a node): patch id
+    per quad into ``patch``; returns the number of patches."""
+    for i in range(m):
+        patch[i] = -1
+    n_p = 0
+    stack = np.empty(m, dtype=np.int64)
+    for i in range(m):
+        if patch[i] >= 0:
+            continue
+        patch[i] = n_p
+        stack[0] = i
+        top = 1
+        while top > 0:
+            top -= 1
+            j = stack[top]
+            for l in range(m):
+                if patch[l] < 0 and _share_node(quads, cand[j], cand[l]):
+                    patch[l] = n_p
+                    stack[top] = l
+                    top += 1
+        n_p += 1
+    return n_p
+
+
+@njit(cache=True, inline="always")
+def _bilinear(xi, eta, a):
+    """Shape function N_a(xi, eta) of a bilinear quad (nodes counter-clockwise from (-1, -1))."""
+    sx = -1.0 if (a == 0 or a == 3) else 1.0
+    se = -1.0 if (a == 0 or a == 1) else 1.0
+    return 0.25 * (1.0 + sx * xi) * (1.0 + se * eta)
+
+
+@njit(cache=True)
+def _patch_contact(quads, cand, prj_all, patch, m, p, weight):
+    """Soft minimum of the gaps of patch ``p``'s quads (LogSumExp, width SOFTMIN_TAU):
+    ``G = g_min - tau ln sum_q exp(-(g_q - g_min) / tau)``, smooth in the nodes, below
+    min g_q by at most tau ln(number of quads at the minimum).  Writes the weights
+    dG/dg_q (softmax, summing to 1) into ``weight`` and returns ``(G, i_dom)``, i_dom the
+    quad of largest weight."""
+    g_min = np.inf
+    i_dom = -1
+    for l in range(m):
+        if patch[l] == p and prj_all[l, 6] < g_min:
+            g_min = prj_all[l, 6]
+            i_dom = l
+    total = 0.0
+    for l in range(m):
+        weight[l] = 0.0
+        if patch[l] == p:
+            weight[l] = math.exp(-(prj_all[l, 6] - g_min) / SOFTMIN_TAU)
+            total += weight[l]
+    for l in range(m):
+        weight[l] /= total
+    return g_min - SOFTMIN_TAU * math.log(total), i_dom
+
+
+@njit(cache=True)
+def facets_cylinder_gaps(x, quads, quad_t, cyl_c, cyl_axis, cyl_R):
+    """Smallest patch gap G (:func:`facets_cylinder_contact`) of the set at each cylinder
+    (np.inf where no quad is near): negative where a pin starts inside the soft minimum."""
+    n_q = quads.shape[0]
+    cand = np.empty(n_q, dtype=np.int64)
+    prj_all = np.empty((n_q, 7))
+    patch = np.empty(n_q, dtype=np.int64)
+    weight = np.empty(n_q)
+    gaps = np.full(cyl_c.shape[0], np.inf)
+    for c in range(cyl_c.shape[0]):
+        m = _facets_near(x, quads, quad_t, cyl_c[c], cyl_axis[c], cyl_R[c], cand, prj_all)
+        for p in range(_patches(quads, cand, m, patch)):
+            gaps[c] = min(gaps[c], _patch_contact(quads, cand, prj_all, patch, m, p, weight)[0])
+    return gaps
+
+
+@njit(cache=True)
+def facets_cylinder_contact(x, v, quads, quad_t, mu, cyl_c, cyl_axis, cyl_R, cyl_slack, cyl_v,
+                            k_n, k_t, dt, hist_q, hist_ft, f_n, f_t, f_cyl):
+    """Penalty contact of a set of shell facets (a tube, a tape) with rigid unbounded
+    cylinders (the pins), Coulomb friction.
+
+    A pin crosses the tube at right angles: they touch at one point, which lies between
+    the shell's nodes in general.  Nodes alone (spheres of radius t/2 at the nodes) let a
+    5 mm pin sink between the tube's node lines -- by R - sqrt(R^2 - (h/2)^2), 0.6 mm
+    for h = 3.2 mm -- and push on the nodes at up to 40 degrees from the vertical, so the
+    force curve depended on where the node lines fell.  Here the facets meet the pin
+    where they come closest to its axis.
+
+    Each quad q near the cylinder (:func:`_facets_near`: within ``PATCH_REACH R`` of its
+    surface) has its closest point to the axis and gap ``g_q = distance - R - t/2``.  The
+    quads form connected patches (:func:`_patches`; the two lips of an open tube's cut
+    are two).  A patch's gap is the soft minimum G of its quads' gaps
+    (:func:`_patch_contact`), its penalty energy ``1/2 k_n min(G, 0)^2``; the force on
+    the nodes is its exact gradient: ``k_n (-G) pi_q N_a(xi_q) n_q`` from each quad,
+    pi_q = dG/dg_q, n_q the radial unit vector at the quad's closest point (envelope
+    theorem).  A hard minimum is a potential too, but its gradient jumps wherever two
+    local minima trade places (a dented tube under the feeder, touching the pin on both
+    sides of a node ring): the central-difference step then made energy, ~10 % of the
+    test's work; the soft one shares the force between them smoothly.  The patches are
+    drawn with the margin PATCH_REACH R so that they do not split where they touch.
+    ``cyl_slack`` (n_cyl,): gap allowance per cylinder, for a strain-free start where the
+    soft minimum of a pin resting on the set is below zero (``-`` :func:`facets_cylinder_gaps`
+    at t = 0, at most SOFTMIN_TAU ln(quads at the minimum)).
+
+    Friction: Coulomb with ``mu`` (the pins' mu_rtb or mu_rtp), stick penalty ``k_t``,
+    at the patch's contact point (weights pi_q), normal the weighted radial direction;
+    history per cylinder in MAXS slots, in place: ``hist_q`` (n_cyl, MAXS) int64 the
+    patch's quad of largest weight (-1 free), ``hist_ft`` (n_cyl, MAXS, 3) its committed
+    friction force; a patch continues the force of the slot whose quad it contains (else
+    starts from zero); the slots of patches that left are cleared.  At most MAXS patches
+    act.  ``f_cyl`` (n_cyl, 3): force ON each cylinder, ADDED.  Returns the number of
+    active (patch, cylinder) contacts.
+    """
+    n_cyl = cyl_c.shape[0]
+    maxs = hist_q.shape[1]
+    n_q = quads.shape[0]
+    cand = np.empty(n_q, dtype=np.int64)
+    prj_all = np.empty((n_q, 7))
+    patch = np.empty(n_q, dtype=np.int64)
+    weight = np.empty(n_q)
+    slot_q = np.empty(maxs, dtype=np.int64)
+    slot_f = np.empty((maxs, 3))
+    nv = np.empty(3)
+    dg = np.empty(3)
+    fold = np.empty(3)
+    fnew = np.empty(3)
+    ds = np.empty(3)
+    n_active = 0
+    for c in range(n_cyl):
+        m = _facets_near(x, quads, quad_t, cyl_c[c], cyl_axis[c], cyl_R[c], cand, prj_all)
+        n_p = _patches(quads, cand, m, patch)
+        for s in range(maxs):
+            slot_q[s] = hist_q[c, s]
+            hist_q[c, s] = -1
+            for k in range(3):
+                slot_f[s, k] = hist_ft[c, s, k]
+                hist_ft[c, s, k] = 0.0
+        slot = 0
+        for p in range(n_p):
+            G, i_dom = _patch_contact(quads, cand, prj_all, patch, m, p, weight)
+            G += cyl_slack[c]
+            if not G < 0.0 or slot == maxs:
+                continue
+            n_active += 1
+            pn = -k_n * G
+            _patch_normal(v, quads, cand, prj_all, weight, m, pn, f_n, f_cyl[c], nv, dg)
+            hist_q[c, slot] = cand[i_dom]
+            slot += 1
+            if k_t <= 0.0 or mu <= 0.0:
+                continue
+            for k in range(3):
+                fold[k] = 0.0
+                dg[k] = dt * (dg[k] - cyl_v[c, k])
+            for s in range(maxs):          # this patch's slot at the previous step
+                for l in range(m):
+                    if slot_q[s] >= 0 and weight[l] > 0.0 and cand[l] == slot_q[s]:
+                        for k in range(3):
+                            fold[k] = slot_f[s, k]
+            _to_tangent_plane(fold, dg, nv)
+            coulomb_return_map(fold, dg, k_t, mu, pn, fnew, ds)
+            for k in range(3):
+                hist_ft[c, slot - 1, k] = fnew[k]
+                f_cyl[c, k] += fnew[k]
+            for l in range(m):
+                for a in range(4):
+                    w = weight[l] * _bilinear(prj_all[l, 0], prj_all[l, 1], a)
+                    for k in range(3):
+                        f_t[quads[cand[l], a], k] -= w * fnew[k]
+    return n_active
+
+
+@njit(cache=True)
+def _patch_normal(v, quads, cand, prj_all, weight, m, pn, f_n, f_cyl, nv, vel):
+    """Normal force of one patch contact (:func:`facets_cylinder_contact`): pn pi_q n_q
+    N_a(xi_q) onto the nodes, minus its sum onto the cylinder ``f_cyl`` (3,); writes the
+    unit mean normal ``nv`` and the contact point's velocity ``vel`` (weights pi_q N_a)."""
+    for k in range(3):
+        nv[k] = 0.0
+        vel[k] = 0.0
+    for l in range(m):
+        if weight[l] == 0.0:
+            continue
+        for a in range(4):
+            nd = quads[cand[l], a]
+            w = weight[l] * _bilinear(prj_all[l, 0], prj_all[l, 1], a)
+            for k in range(3):
+                f_n[nd, k] += w * pn * prj_all[l, 3 + k]
+                vel[k] += w * v[nd, k]
+        for k in range(3):
+            nv[k] += weight[l] * prj_all[l, 3 + k]
+            f_cyl[k] -= weight[l] * pn * prj_all[l, 3 + k]
+    nn = math.sqrt(_dot(nv, nv))
+    for k in range(3):
+        nv[k] /= nn
 
 
 # ------------------------------------------------------ (c) nodes on shell facets (quads)

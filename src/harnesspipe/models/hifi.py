@@ -43,6 +43,7 @@ from harnesspipe.models.tube_equivalent import from_config as tube_equivalent
 
 FAMILIES = ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive", "damping")
 MAX_LIGHT_SCALE = 16.0   # cap of the selective shell mass scaling (the tape on its bond needs ~13)
+PIN_PATCHES = 4          # contacts of one shell part with one pin at most (connected patches: an open tube's lips)
 TIE_TOL = {hm.TIE_COVERING: 0.3, hm.TIE_WIRES: 0.5, hm.TIE_TAPE: 0.3}   # mm: facet chord sag / hexagonal bundle under a round band
 
 
@@ -534,19 +535,20 @@ class HifiSystem(BundleSystem):
         mid = mesh.wire_nodes[centre, mesh.wire_nodes.shape[1] // 2]
         self.free[mid, 0] = self.free[mid, 2] = False    # axial and lateral rigid-body modes
         self._setup_pin_contacts()
-        self._unbounded = np.full(3, np.inf)         # pins are infinitely long cylinders
         self.f_pin_prev = np.zeros_like(self.pins.force)
         self.impulse = np.zeros_like(self.pins.force)
         self.impulse_u = self.impulse_time = self.u_prev = 0.0
         self.c_prev = self.pins.centres.copy()
 
     def _setup_pin_contacts(self):
-        """The wires against the pins as chains; shell nodes in one group per friction
-        coefficient (own penalty from the group's lightest node)."""
+        """The wires against the pins as chains; the shells in one facet set per part (tube,
+        fabric, tape: its own friction coefficient, its penalty from the part's lightest
+        node), each patch of it touching a pin at its closest point
+        (:func:`ce.facets_cylinder_contact`; PIN_PATCHES: an open tube's two lips, tape
+        pieces)."""
         mesh, itf = self.mesh, self.inp.interface
         m = self.mass[:, 0]
         self.wire_pins = self._wire_pin_contact(m)
-        wn = np.arange(self.nw, dtype=np.int64)
         self.pin_groups = []
         if not self.has_shells:
             return
@@ -554,16 +556,16 @@ class HifiSystem(BundleSystem):
             sel = mesh.shell_part == part
             if not sel.any():
                 continue
-            nodes = np.unique(self.sconn[sel])
-            r = np.zeros(nodes.size)
-            np.maximum.at(r, np.searchsorted(nodes, self.sconn[sel].ravel()),
-                          np.repeat(0.5 * mesh.shell_thickness[sel], 4))
-            keep = ~np.isin(nodes, wn)
-            nodes, r = nodes[keep], r[keep]
+            quads = np.ascontiguousarray(self.sconn[sel])
+            t = np.ascontiguousarray(mesh.shell_thickness[sel], dtype=float)
+            p = self.pins
+            gaps = ce.facets_cylinder_gaps(self.x, quads, t, p.centres, p.axes, p.radii)
             mu = itf["mu_rtp"] if part == hm.PART_TAPE else itf["mu_rtb"]
-            self.pin_groups.append(dict(nodes=nodes, r=np.ascontiguousarray(r, dtype=float),
-                                        mu=np.full(nodes.size, float(mu)), k=self._penalty(m[nodes]),
-                                        hist=np.zeros((nodes.size, 3, 3))))
+            self.pin_groups.append(dict(
+                quads=quads, t=t, slack=np.maximum(-gaps, 0.0),    # strain-free start
+                mu=float(mu), k=self._penalty(m[np.unique(quads)]),
+                hist_q=np.full((self.pins.c0.shape[0], PIN_PATCHES), -1, dtype=np.int64),
+                hist=np.zeros((self.pins.c0.shape[0], PIN_PATCHES, 3))))
 
     def _wire_pin_contact(self, m) -> dict:
         """The wires against the pins as chains (:func:`ce.chain_cylinder_contact`): the
@@ -581,7 +583,7 @@ class HifiSystem(BundleSystem):
         self.pins.move_to(t)
 
     def _loading_forces(self, v, dt, F) -> int:
-        """The pins against the wires (as chains) and the shell nodes (with friction)."""
+        """The pins against the wires (as chains) and the shells' facets (with friction)."""
         pn, pt = F[3], F[4]
         p = self.pins
         p.force[...] = 0.0
@@ -590,9 +592,9 @@ class HifiSystem(BundleSystem):
                                             p.centres, p.axes, p.radii, p.velocity, w["k"],
                                             w["k"], dt, w["hist"], pn, pt, p.force)
         for g in self.pin_groups:
-            active += ce.node_cylinder_contact(self.x, v, g["nodes"], g["r"], g["mu"], p.centres,
-                                               p.axes, p.radii, self._unbounded, p.velocity,
-                                               g["k"], g["k"], dt, g["hist"], pn, pt, p.force)
+            active += ce.facets_cylinder_contact(self.x, v, g["quads"], g["t"], g["mu"], p.centres,
+                                                 p.axes, p.radii, g["slack"], p.velocity, g["k"],
+                                                 g["k"], dt, g["hist_q"], g["hist"], pn, pt, p.force)
         return active
 
     def external_work(self, t0, t1) -> float:

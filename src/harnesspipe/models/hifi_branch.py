@@ -101,9 +101,10 @@ def _segment_config(config: dict, L: float, e: float) -> dict:
 
 
 def _segment_resolution(res: dict, config: dict, length: float, tube: float) -> dict:
-    """The profile's resolution scaled from the three-point sample to the segment's lengths."""
+    """The profile's resolution scaled from the three-point sample to the segment's lengths;
+    the tubes' cut on the segment's local top, i.e. out of the harness plane (:func:`_frame`)."""
     tp = config["three_point"]
-    out = dict(res)
+    out = {"cut_at": "top", **res}
     out["wire_elements"] = max(2, round(res["wire_elements"] * length / tp["sample_length"]))
     out["tube_axial"] = max(2, round(res["tube_axial"] * tube / tp["tube_length"]))
     return out

@@ -29,10 +29,14 @@ Choices where the paper is silent (each documented where it is made)
   (l = 152.4).  ``shell_thickness`` of the tube is the *geometric* (contact) thickness
   ``(d_o - d_i)/2`` = 1.7, whose faces are the ridged envelope (inner d_i/2, outer d_o/2);
   the stiffness section thickness is ``equivalent_shell(...)["t"]``, assigned by the model.
-* Open tube: longitudinal cut at the top (phi = 0, under the feeder; the paper does not
-  show where the slit was; on top it closes in bending) -- ``resolution["cut_at"] =
-  "bottom"`` moves it to phi = pi.  Nodes are duplicated along the seam; ``cut_pairs``
-  lists (node at phi = cut, node at phi = cut + 2 pi) per axial station.
+* Open tube: longitudinal cut at the side (phi = pi/2, on the neutral axis of the bend,
+  where no pin meets it).  The paper does not say where the slit was (its Fig. 17 shows
+  the branch harness's cut from the side).  On top (``resolution["cut_at"] = "top"``,
+  phi = 0, under the feeder) the pin presses on the two free edges of the slit; it wedges
+  them apart and the wires' penalty contact against the split lips then makes energy,
+  4-7 % of the test's work in the quick model; ``"bottom"`` (phi = pi) puts the rollers
+  there.  Nodes are duplicated along the seam; ``cut_pairs`` lists (node at phi = cut,
+  node at phi = cut + 2 pi) per axial station.
 * Fabric tube: 1.25 wraps of a sheet whose mid-surface spirals ``r(theta) = r1 + (r2 - r1)
   theta / (2 pi wraps)`` (4.7 -> 5.3), theta in [0, 2 pi wraps]; the overlap (theta in
   [0, pi/2] under theta in [2 pi, 5 pi/2]) is centred on the top.  The two layers' mid
@@ -110,6 +114,7 @@ TIE_COVERING, TIE_WIRES, TIE_TAPE = 1, 2, 3
 GROUP_COVERING, GROUP_HELIX, GROUP_END_LEFT, GROUP_END_RIGHT = 0, 1, 2, 3
 WIRE_CLEARANCE = 1.0e-3            # relative packing clearance (fraction of d)
 TAPINGS = ("none", "coarse", "halflap", "ends")
+CUT_PHI = {"top": 0.0, "side": 0.5 * np.pi, "bottom": np.pi}   # resolution["cut_at"]: angle of the open tube's slit from the top
 
 PRESETS = {
     # beams 19 x 32 = 608; shells 288 (closed) .. 512 (half-lap, 5 elements per turn)
@@ -375,7 +380,7 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
     ov_in = ov_out = np.zeros(0, dtype=int)
     ex = np.array([1.0, 0.0, 0.0])
     if cov.kind == "tube":
-        phi_cut = {"top": 0.0, "bottom": np.pi}[res.get("cut_at", "top")]
+        phi_cut = CUT_PHI[res.get("cut_at", "side")]
         phi = phi_cut + np.linspace(0.0, 2.0 * np.pi, n_c + 1)
         P = _cyl(xc[:, None], cov.R, phi[None, :])
         P[:, -1] = P[:, 0]                               # exact duplicates across the cut
@@ -519,7 +524,7 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
     if cov.kind == "tube":
         info.update(tube_mid_radius=cov.R, tube_contact_thickness=cov.t,
                     tape_radius=float(cov.tape_radius(np.zeros(1))[0]),
-                    cut_phi=({"top": 0.0, "bottom": np.pi}[res.get("cut_at", "top")] if cov.cut else None))
+                    cut_phi=(CUT_PHI[res.get("cut_at", "side")] if cov.cut else None))
     elif cov.kind == "fabric":
         info.update(fabric_r1=cov.r1, fabric_r2=cov.r2, fabric_wraps=cov.wraps, fabric_phi0=cov.phi0,
                     fabric_layer_gap=float(cov.spiral_radius(2 * np.pi) - cov.spiral_radius(0.0)))
