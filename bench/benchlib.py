@@ -26,6 +26,22 @@ def jit_seconds(script: str) -> tuple[list[float], list[float]]:
         return cold, fresh_process_seconds(script, cache)
 
 
+BY_HAND = "### By hand"   # sub-heading of a section's notes that a rerun of its bench keeps
+
+
+def section_tail(heading: str) -> str:
+    """The section ``heading`` of RESULTS.md from its BY_HAND sub-heading on ('' if none):
+    the notes written by hand, which a bench rewriting the section keeps."""
+    old = RESULTS.read_text() if RESULTS.exists() else ""
+    start = old.find(heading + "\n")
+    if start < 0:
+        return ""
+    nxt = old.find("\n## ", start + len(heading))
+    section = old[start:nxt] if nxt >= 0 else old[start:]
+    mark = section.find(BY_HAND)
+    return section[mark:].rstrip() if mark >= 0 else ""
+
+
 def write_section(heading: str, text: str) -> None:
     """Replace the section ``heading`` of RESULTS.md in place (append it if new)."""
     old = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
