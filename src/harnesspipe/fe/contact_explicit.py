@@ -836,8 +836,9 @@ def _quad_axis_closest(x, quads, q, c0, ax, out):
 
 @njit(cache=True)
 def _facets_near(x, quads, quad_t, c0, ax, R, cand, prj_all):
-    """Quads of the set whose mid-surface comes within ``PATCH_REACH R`` of the cylinder
-    (c0, ax, R) (gap = distance to the axis - R - t/2 < PATCH_REACH R): their ids into
+    """Quads of the set whose face comes within ``PATCH_REACH R`` of the cylinder
+    (c0, ax, R) (gap = distance of the mid-surface to the axis - R - t/2 < PATCH_REACH R),
+    the axis not on the mid-surface itself: their ids into
     ``cand``, their closest points (:func:`_quad_axis_closest`) into ``prj_all[:, :6]`` and
     gaps into ``prj_all[:, 6]``; returns their number.  A quad whose bounding sphere stays
     farther is not projected."""
@@ -905,10 +906,11 @@ def _bilinear(xi, eta, a):
 
 
 @njit(cache=True)
-def _patch_contact(quads, cand, prj_all, patch, m, p, weight):
+def _patch_contact(prj_all, patch, m, p, weight):
     """Soft minimum of the gaps of patch ``p``'s quads (LogSumExp, width SOFTMIN_TAU):
     ``G = g_min - tau ln sum_q exp(-(g_q - g_min) / tau)``, smooth in the nodes, below
-    min g_q by at most tau ln(number of quads at the minimum).  Writes the weights
+    min g_q by at most tau ln(number of the patch's quads), in practice by tau ln(those
+    within a few tau of the minimum).  Writes the weights
     dG/dg_q (softmax, summing to 1) into ``weight`` and returns ``(G, i_dom)``, i_dom the
     quad of largest weight."""
     g_min = np.inf
@@ -941,7 +943,7 @@ def facets_cylinder_gaps(x, quads, quad_t, cyl_c, cyl_axis, cyl_R):
     for c in range(cyl_c.shape[0]):
         m = _facets_near(x, quads, quad_t, cyl_c[c], cyl_axis[c], cyl_R[c], cand, prj_all)
         for p in range(_patches(quads, cand, m, patch)):
-            gaps[c] = min(gaps[c], _patch_contact(quads, cand, prj_all, patch, m, p, weight)[0])
+            gaps[c] = min(gaps[c], _patch_contact(prj_all, patch, m, p, weight)[0])
     return gaps
 
 
@@ -970,18 +972,22 @@ def facets_cylinder_contact(x, v, quads, quad_t, mu, cyl_c, cyl_axis, cyl_R, cyl
     sides of a node ring): the central-difference step then made energy, ~10 % of the
     test's work; the soft one shares the force between them smoothly.  The patches are
     drawn with the margin PATCH_REACH R so that they do not split where they touch.
-    ``cyl_slack`` (n_cyl,): gap allowance per cylinder, for a strain-free start where the
-    soft minimum of a pin resting on the set is below zero (``-`` :func:`facets_cylinder_gaps`
-    at t = 0, at most SOFTMIN_TAU ln(quads at the minimum)).
+    ``cyl_slack`` (n_cyl,): gap allowance per cylinder, held for the run, for a
+    strain-free start where the soft minimum of a pin resting on the set is below zero
+    (``-`` :func:`facets_cylinder_gaps` at t = 0, a few SOFTMIN_TAU at most).  The soft
+    minimum moves the contact by up to tau ln(quads near the minimum) (0.014 mm where four
+    quads meet under the pin) -- geometry well below the facets' own chord sag.
 
     Friction: Coulomb with ``mu`` (the pins' mu_rtb or mu_rtp), stick penalty ``k_t``,
     at the patch's contact point (weights pi_q), normal the weighted radial direction;
     history per cylinder in MAXS slots, in place: ``hist_q`` (n_cyl, MAXS) int64 the
     patch's quad of largest weight (-1 free), ``hist_ft`` (n_cyl, MAXS, 3) its committed
-    friction force; a patch continues the force of the slot whose quad it contains (else
-    starts from zero); the slots of patches that left are cleared.  At most MAXS patches
-    act.  ``f_cyl`` (n_cyl, 3): force ON each cylinder, ADDED.  Returns the number of
-    active (patch, cylinder) contacts.
+    friction force; a patch continues the force of the first slot whose quad it contains
+    (else starts from zero); the slots of patches that left are cleared.  The Coulomb
+    limit is mu times the resultant normal force pn |sum pi_q n_q|.  Every patch carries
+    its normal force; beyond MAXS patches at one cylinder the extra ones are frictionless.
+    ``f_cyl`` (n_cyl, 3): force ON each cylinder, ADDED.  Returns the number of active
+    (patch, cylinder) contacts.
     """
     n_cyl = cyl_c.shape[0]
     maxs = hist_q.shape[1]
@@ -1009,31 +1015,30 @@ def facets_cylinder_contact(x, v, quads, quad_t, mu, cyl_c, cyl_axis, cyl_R, cyl
                 hist_ft[c, s, k] = 0.0
         slot = 0
         for p in range(n_p):
-            G, i_dom = _patch_contact(quads, cand, prj_all, patch, m, p, weight)
+            G, i_dom = _patch_contact(prj_all, patch, m, p, weight)
             G += cyl_slack[c]
-            if not G < 0.0 or slot == maxs:
+            if not G < 0.0:
                 continue
             n_active += 1
             pn = -k_n * G
-            _patch_normal(v, quads, cand, prj_all, weight, m, pn, f_n, f_cyl[c], nv, dg)
+            f_normal = pn * _patch_normal(v, quads, cand, prj_all, weight, m, pn, f_n, f_cyl[c],
+                                          nv, dg)
+            if k_t <= 0.0 or mu <= 0.0 or slot == maxs or f_normal <= 0.0:
+                continue                   # frictionless (beyond MAXS patches: no history)
             hist_q[c, slot] = cand[i_dom]
             slot += 1
-            if k_t <= 0.0 or mu <= 0.0:
-                continue
             for k in range(3):
                 fold[k] = 0.0
                 dg[k] = dt * (dg[k] - cyl_v[c, k])
-            for s in range(maxs):          # this patch's slot at the previous step
-                for l in range(m):
-                    if slot_q[s] >= 0 and weight[l] > 0.0 and cand[l] == slot_q[s]:
-                        for k in range(3):
-                            fold[k] = slot_f[s, k]
+            _patch_history(slot_q, slot_f, cand, weight, m, fold)
             _to_tangent_plane(fold, dg, nv)
-            coulomb_return_map(fold, dg, k_t, mu, pn, fnew, ds)
+            coulomb_return_map(fold, dg, k_t, mu, f_normal, fnew, ds)
             for k in range(3):
                 hist_ft[c, slot - 1, k] = fnew[k]
                 f_cyl[c, k] += fnew[k]
             for l in range(m):
+                if weight[l] == 0.0:
+                    continue
                 for a in range(4):
                     w = weight[l] * _bilinear(prj_all[l, 0], prj_all[l, 1], a)
                     for k in range(3):
@@ -1042,10 +1047,25 @@ def facets_cylinder_contact(x, v, quads, quad_t, mu, cyl_c, cyl_axis, cyl_R, cyl
 
 
 @njit(cache=True)
+def _patch_history(slot_q, slot_f, cand, weight, m, fold):
+    """Committed friction force of a patch: that of the first previous slot whose quad is in
+    the patch (weight > 0), else zero (``fold`` written)."""
+    for s in range(slot_q.shape[0]):
+        if slot_q[s] < 0:
+            continue
+        for l in range(m):
+            if weight[l] > 0.0 and cand[l] == slot_q[s]:
+                for k in range(3):
+                    fold[k] = slot_f[s, k]
+                return
+
+
+@njit(cache=True)
 def _patch_normal(v, quads, cand, prj_all, weight, m, pn, f_n, f_cyl, nv, vel):
     """Normal force of one patch contact (:func:`facets_cylinder_contact`): pn pi_q n_q
     N_a(xi_q) onto the nodes, minus its sum onto the cylinder ``f_cyl`` (3,); writes the
-    unit mean normal ``nv`` and the contact point's velocity ``vel`` (weights pi_q N_a)."""
+    unit mean normal ``nv`` and the contact point's velocity ``vel`` (weights pi_q N_a).
+    Returns |sum_q pi_q n_q| (<= 1: the resultant is pn times it)."""
     for k in range(3):
         nv[k] = 0.0
         vel[k] = 0.0
@@ -1062,8 +1082,10 @@ def _patch_normal(v, quads, cand, prj_all, weight, m, pn, f_n, f_cyl, nv, vel):
             nv[k] += weight[l] * prj_all[l, 3 + k]
             f_cyl[k] -= weight[l] * pn * prj_all[l, 3 + k]
     nn = math.sqrt(_dot(nv, nv))
-    for k in range(3):
-        nv[k] /= nn
+    if nn > 0.0:
+        for k in range(3):
+            nv[k] /= nn
+    return nn
 
 
 # ------------------------------------------------------ (c) nodes on shell facets (quads)

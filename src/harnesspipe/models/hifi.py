@@ -237,8 +237,8 @@ class BundleSystem:
                 self._cut_contact()
 
     def _cut_contact(self):
-        """Self-contact across the open tube's cut (node pairs ``a`` at phi = 0, ``b`` at
-        phi = 2 pi, coincident at the start): the cut may open freely but its edges cannot
+        """Self-contact across the open tube's cut (node pairs ``a`` at the cut's angle,
+        ``b`` a full turn on, coincident at the start): the cut may open freely but its edges cannot
         pass through each other in the hoop direction.  With ``t`` the unit vector from
         ``a`` to its hoop neighbour (into a's side of the wall, current configuration), the
         overlap is ``p = (x_b - x_a) . t``; a positive overlap is resisted by the penalty

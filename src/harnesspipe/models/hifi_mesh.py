@@ -116,6 +116,15 @@ WIRE_CLEARANCE = 1.0e-3            # relative packing clearance (fraction of d)
 TAPINGS = ("none", "coarse", "halflap", "ends")
 CUT_PHI = {"top": 0.0, "side": 0.5 * np.pi, "bottom": np.pi}   # resolution["cut_at"]: angle of the open tube's slit from the top
 
+
+def cut_angle(res: dict) -> float:
+    """Angle of the open tube's slit from the top: ``res["cut_at"]`` (default side)."""
+    where = res.get("cut_at", "side")
+    if where not in CUT_PHI:
+        raise ValueError(f"resolution cut_at: {where!r} is not one of {sorted(CUT_PHI)}")
+    return CUT_PHI[where]
+
+
 PRESETS = {
     # beams 19 x 32 = 608; shells 288 (closed) .. 512 (half-lap, 5 elements per turn)
     "quick": {"wire_elements": 32, "tube_circ": 12, "tube_axial": 16, "tape_width": 4,
@@ -380,7 +389,7 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
     ov_in = ov_out = np.zeros(0, dtype=int)
     ex = np.array([1.0, 0.0, 0.0])
     if cov.kind == "tube":
-        phi_cut = CUT_PHI[res.get("cut_at", "side")]
+        phi_cut = cut_angle(res)
         phi = phi_cut + np.linspace(0.0, 2.0 * np.pi, n_c + 1)
         P = _cyl(xc[:, None], cov.R, phi[None, :])
         P[:, -1] = P[:, 0]                               # exact duplicates across the cut
@@ -524,7 +533,7 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
     if cov.kind == "tube":
         info.update(tube_mid_radius=cov.R, tube_contact_thickness=cov.t,
                     tape_radius=float(cov.tape_radius(np.zeros(1))[0]),
-                    cut_phi=(CUT_PHI[res.get("cut_at", "side")] if cov.cut else None))
+                    cut_phi=(cut_angle(res) if cov.cut else None))
     elif cov.kind == "fabric":
         info.update(fabric_r1=cov.r1, fabric_r2=cov.r2, fabric_wraps=cov.wraps, fabric_phi0=cov.phi0,
                     fabric_layer_gap=float(cov.spiral_radius(2 * np.pi) - cov.spiral_radius(0.0)))
