@@ -238,8 +238,9 @@ def _quat_to_matrix_at(quat, a, Rg, i):
 
 @njit(cache=True, parallel=True)
 def beam_forces(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area, sec_GJ, sec_id,
-                mats, mat_id, eps_p, alpha, sa_h, f_el, f_int, n_chunks):
-    """Add the internal (resisting) forces of all beam elements into ``f_int`` (n_nodes, 6).
+                mats, mat_id, eps_p, alpha, sa_h, f_el, f_int, n_chunks, sign=1.0):
+    """Add ``sign`` x the internal (resisting) forces of all beam elements into ``f_int``
+    (n_nodes, 6) (``sign = -1``: the forces ON the nodes).
 
     ``X0``/``x`` (n_nodes, 3) reference and current positions, ``quat`` (n_nodes, 4) nodal
     rotations, ``conn`` (n_el, 2) global node ids, ``R0`` (n_el, 3, 3) initial frames;
@@ -285,8 +286,8 @@ def beam_forces(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area, sec_GJ
         a = conn[e, 0]
         b = conn[e, 1]
         for i in range(6):
-            f_int[a, i] += f_el[e, i]
-            f_int[b, i] += f_el[e, 6 + i]
+            f_int[a, i] += sign * f_el[e, i]
+            f_int[b, i] += sign * f_el[e, 6 + i]
 
 
 @njit(cache=True, parallel=True)

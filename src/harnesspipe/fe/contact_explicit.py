@@ -458,15 +458,16 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
     for e in range(seg.shape[0]):
         valence[seg[e, 0]] += 1
         valence[seg[e, 1]] += 1
-    # phase 1: which pairs touch, and at which of their points (no per-pair float arrays)
+    # phase 1: which pairs touch, and at which of their points (kept for phase 2)
     flag = np.empty(n_pairs, dtype=np.int8)
+    pts = np.empty((n_pairs, 4, WW_POINTS))   # s, u, weight per point; beta, beta' (row 3)
     n_chunks = (n_pairs + CHUNK - 1) // CHUNK
     if n_chunks <= SERIAL_MAX_CHUNKS:
-        _ww_flags(x, seg, seg_r, seg_body, pairs, valence, 0, n_pairs, flag)
+        _ww_flags(x, seg, seg_r, seg_body, pairs, valence, 0, n_pairs, flag, pts)
     else:
         for ch in prange(n_chunks):
             _ww_flags(x, seg, seg_r, seg_body, pairs, valence, ch * CHUNK,
-                      min(n_pairs, (ch + 1) * CHUNK), flag)
+                      min(n_pairs, (ch + 1) * CHUNK), flag, pts)
     n_act = 0
     for p in range(n_pairs):
         if flag[p] != 0:
@@ -478,8 +479,6 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
             idx[j] = p
             j += 1
     # phase 2: forces and friction of the touching pairs only
-    ps = np.empty((n_act, WW_POINTS))
-    pu = np.empty((n_act, WW_POINTS))
     pfn = np.empty((n_act, WW_POINTS, 3))     # weighted normal force on a's point
     pft = np.empty((n_act, WW_POINTS, 3))     # weighted friction force on a's point
     hnew = np.empty((n_act, WW_POINTS, 3))    # new friction history (per unit weight)
@@ -487,13 +486,13 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
     dt_phys = dt * time_scale
     n_chunks = (n_act + CHUNK - 1) // CHUNK
     if n_chunks <= SERIAL_MAX_CHUNKS:
-        _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k, d_c, dt,
-                   dt_phys, hist_partner, hist_ft, 0, n_act, ps, pu, pfn, pft, hnew, pdu)
+        _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c, dt,
+                   dt_phys, hist_partner, hist_ft, 0, n_act, pfn, pft, hnew, pdu)
     else:
         for ch in prange(n_chunks):
-            _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k, d_c,
+            _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c,
                        dt, dt_phys, hist_partner, hist_ft, ch * CHUNK,
-                       min(n_act, (ch + 1) * CHUNK), ps, pu, pfn, pft, hnew, pdu)
+                       min(n_act, (ch + 1) * CHUNK), pfn, pft, hnew, pdu)
     # serial: commit history, scatter forces (in pair order)
     for i in range(hist_partner.shape[0]):
         for s in range(hist_partner.shape[1]):
@@ -519,8 +518,8 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
         for k in range(WW_POINTS):
             if not (flag[p] >> k) & 1:
                 continue
-            s = ps[j, k]
-            u = pu[j, k]
+            s = pts[p, 0, k]
+            u = pts[p, 1, k]
             for c in range(3):
                 fn = pfn[j, k, c]
                 ft = pft[j, k, c]
@@ -552,12 +551,10 @@ def _boxes_apart(x, a0, a1, b0, b1, r):
 
 
 @njit(cache=True)
-def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag):
-    """flag[p] for pairs p0..p1-1: bit k set if contact point k of the pair penetrates."""
-    sv = np.empty(WW_POINTS)
-    uv = np.empty(WW_POINTS)
-    wv = np.empty(WW_POINTS)
-    bl = np.empty(2)
+def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag, pts):
+    """flag[p] for pairs p0..p1-1: bit k set if contact point k of the pair penetrates;
+    for a pair with a flag, its points (:func:`_segment_points`) into ``pts[p]``: rows s,
+    u, weight, and (beta, beta', rule mask) in row 3."""
     for p in range(p0, p1):
         flag[p] = 0
         a = pairs[p, 0]
@@ -573,13 +570,14 @@ def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag):
         rr = seg_r[a] + seg_r[b]
         if _boxes_apart(x, a0, a1, b0, b1, rr):     # early reject (most candidates)
             continue
-        m = _segment_points(x, seg, a, b, valence, sv, uv, wv, bl)
+        m = _segment_points(x, seg, a, b, valence, pts[p, 0], pts[p, 1], pts[p, 2], pts[p, 3])
+        pts[p, 3, 2] = m
         f = 0
         for k in range(WW_POINTS):
             if not (m >> k) & 1:
                 continue
-            s = sv[k]
-            u = uv[k]
+            s = pts[p, 0, k]
+            u = pts[p, 1, k]
             dist2 = 0.0
             for c in range(3):
                 d = ((1 - s) * x[a0, c] + s * x[a1, c]) - ((1 - u) * x[b0, c] + u * x[b1, c])
@@ -590,13 +588,12 @@ def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag):
 
 
 @njit(cache=True)
-def _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k, d_c, dt,
-               dt_phys, hist_partner, hist_ft, j0, j1, ps, pu, pfn, pft, hnew, pdu):
-    """Normal and friction forces of the touching pairs idx[j0:j1] (compact arrays by j);
-    ``pdu[j]``: (U_par - U_cross) beta' for :func:`_blend_forces`."""
+def _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c, dt,
+               dt_phys, hist_partner, hist_ft, j0, j1, pfn, pft, hnew, pdu):
+    """Normal and friction forces of the touching pairs idx[j0:j1] (compact arrays by j) at
+    their points ``pts`` (:func:`_ww_flags`); ``pdu[j]``: (U_par - U_cross) beta' for
+    :func:`_blend_forces`."""
     scr = np.zeros((4, 3))
-    wv = np.empty(WW_POINTS)
-    bl = np.empty(2)
     for j in range(j0, j1):
         p = idx[j]
         for k in range(WW_POINTS):
@@ -608,7 +605,9 @@ def _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k
         b = pairs[p, 1]
         if a > b:
             a, b = b, a
-        m = _segment_points(x, seg, a, b, valence, ps[j], pu[j], wv, bl)
+        wv = pts[p, 2]
+        bl = pts[p, 3]
+        m = int(bl[2])
         beta = bl[0]
         u_cross = 0.0
         u_par = 0.0
@@ -625,8 +624,8 @@ def _ww_forces(x, v, seg, seg_r, pairs, valence, idx, flag, k_n, k_t, mu_s, mu_k
         for k in range(WW_POINTS):
             if not (flag[p] >> k) & 1:
                 continue
-            s = ps[j, k]
-            u = pu[j, k]
+            s = pts[p, 0, k]
+            u = pts[p, 1, k]
             dist2 = 0.0
             for c in range(3):
                 pa = (1 - s) * x[a0, c] + s * x[a1, c]

@@ -34,6 +34,7 @@ System protocol (duck-typed; see :class:`harnesspipe.models.hifi.HifiSystem`)::
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -45,8 +46,9 @@ from harnesspipe.fe.explicit import ExplicitError
 
 
 @njit(cache=True)
-def half_kick(v, f, minv, free, hdt):
-    """v += hdt M^-1 f on the free dofs (``f`` (n, 6) the total force); returns nothing."""
+def kick_drift(v, f, minv, free, hdt, h, du):
+    """The start of a step: ``v += hdt M^-1 f`` on the free dofs (``f`` (n, 6) the total
+    force) and the drift ``du = h v``; returns nothing."""
     n, k = f.shape
     for i in range(n):
         for j in range(k):
@@ -54,13 +56,15 @@ def half_kick(v, f, minv, free, hdt):
                 v[i, j] += hdt * f[i, j] * minv[i, j]
             else:
                 v[i, j] = 0.0
+            du[i, j] = h * v[i, j]
 
 
 @njit(cache=True)
 def close_step(F, F_new, du, W, v, minv, free, hdt, m, f):
     """The end of a step: every family's work ``W[p] += 1/2 (F_p + F_new_p) . du``,
     ``F <- F_new``, the total force ``f = sum_p F_new_p`` and the closing half kick
-    ``v += hdt M^-1 f``; returns the kinetic energy ``1/2 v . M v``.  One pass over the
+    ``v += hdt M^-1 f``; returns the kinetic energy ``1/2 v . M v`` and the families'
+    total work ``sum_p W[p]``.  One pass over the
     dofs, all families of a dof together (the families are the integrator's largest
     arrays: this pass is memory bound)."""
     P, n, k = F.shape
@@ -88,9 +92,11 @@ def close_step(F, F_new, du, W, v, minv, free, hdt, m, f):
         else:
             vv[q] = 0.0
         ke += mm[q] * vv[q] * vv[q]
+    w_total = 0.0
     for p in range(P):
         W[p] += 0.5 * w[p]
-    return 0.5 * ke
+        w_total += W[p]
+    return 0.5 * ke, w_total
 
 
 @dataclass(frozen=True)
@@ -151,6 +157,7 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
     ke_ie = bal_max = 0.0
     t = 0.0
     step = 0
+    ke_ie_from = settings.ke_ie_from * total_time
     out_dt = total_time / settings.n_output
     next_out = out_dt
     rows = [_row(0.0, 0.0, -W, 0.0, names, system.observe(0.0))]
@@ -161,29 +168,30 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
         if step % settings.recheck_every == 0:
             dt = min(dt, settings.safety * system.stable_step())
         h = min(dt, total_time - t)
-        half_kick(v, f, minv, free, 0.5 * h)
-        np.multiply(v, h, out=du)
+        kick_drift(v, f, minv, free, 0.5 * h, h, du)
         t_new = t + h
         system.advance(du, t_new)
-        ke = close_step(F, system.forces(t_new, v, h), du, W, v, minv, free, 0.5 * h, m, f)
+        ke, w_total = close_step(F, system.forces(t_new, v, h), du, W, v, minv, free, 0.5 * h,
+                                 m, f)
         w_ext += system.external_work(t, t_new)
         t = t_new
-        absorbed = -W
-        if i_drv is not None:
-            absorbed[i_drv] += w_ext
-        balance = abs(ke + absorbed.sum() - w_ext)
-        if not np.isfinite(balance):
-            raise ExplicitError("non-finite state", step, t, ke, absorbed[i_int], w_ext, h)
+        # KE + sum_p (-W_p) = W_ext; the driven family's absorbed energy includes W_ext
+        balance = abs(ke - w_total - (0.0 if i_drv is not None else w_ext))
+        if not math.isfinite(balance):
+            raise ExplicitError("non-finite state", step, t, ke, -W[i_int], w_ext, h)
         if balance > settings.energy_stop * abs(w_ext) + settings.energy_floor:
             raise ExplicitError(f"energy balance error {balance:.4g} > {settings.energy_stop:g} "
                                 f"|W_ext| + {settings.energy_floor:g}", step, t, ke,
-                                absorbed[i_int], w_ext, h)
+                                -W[i_int], w_ext, h)
         bal_max = max(bal_max, balance)
-        if t > settings.ke_ie_from * total_time:
-            ie = absorbed[i_int]
+        if t > ke_ie_from:
+            ie = -W[i_int]
             if ie > 0.0:
                 ke_ie = max(ke_ie, ke / ie)
         if t >= next_out - 1e-12 * total_time or t >= total_time * (1.0 - 1e-12):
+            absorbed = -W
+            if i_drv is not None:
+                absorbed[i_drv] += w_ext
             umax = system.displacement_max()
             if umax > settings.max_displacement:
                 raise ExplicitError(f"displacement {umax:.4g} mm > {settings.max_displacement:g} mm",

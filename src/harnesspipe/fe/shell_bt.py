@@ -432,27 +432,28 @@ def shell_element_forces_serial(x, v, conn, thick, mat, state, dt, f_el, hg=HOUR
 
 
 @njit(cache=True)
-def scatter_add(conn, f_el, f_int):
-    """f_int[conn[e, a]] += f_el[e, a] (serial, ADDS)."""
+def scatter_add(conn, f_el, f_int, sign=1.0):
+    """f_int[conn[e, a]] += sign f_el[e, a] (serial, ADDS)."""
     for e in range(conn.shape[0]):
         for a in range(4):
             nd = conn[e, a]
             for i in range(6):
-                f_int[nd, i] += f_el[e, a, i]
+                f_int[nd, i] += sign * f_el[e, a, i]
 
 
 @njit(cache=True)
-def shell_forces(x, v, conn, thick, mat, state, dt, f_el, f_int, hg=HOURGLASS_COEF):
+def shell_forces(x, v, conn, thick, mat, state, dt, f_el, f_int, hg=HOURGLASS_COEF, sign=1.0):
     """One BLT internal-force evaluation: stress update over ``dt`` with the half-step
     velocities ``v`` (n_nodes, 6) at positions ``x`` (n_nodes, 3), element forces into
-    ``f_el`` (n_el, 4, 6) and ADDED to ``f_int`` (n_nodes, 6) (resisting force; the
-    caller zeroes it).  Nodes not in ``conn`` are not touched.  Meshes with fewer than
-    ``PARALLEL_MIN`` elements run serially (a thread launch costs more than they do)."""
+    ``f_el`` (n_el, 4, 6) and ``sign`` x them ADDED to ``f_int`` (n_nodes, 6) (1: the
+    resisting force, -1: the force ON the nodes).  Nodes not in ``conn`` are not touched.
+    Meshes with fewer than ``PARALLEL_MIN`` elements run serially (a thread launch costs
+    more than they do)."""
     if conn.shape[0] < PARALLEL_MIN:
         shell_element_forces_serial(x, v, conn, thick, mat, state, dt, f_el, hg)
     else:
         shell_element_forces(x, v, conn, thick, mat, state, dt, f_el, hg)
-    scatter_add(conn, f_el, f_int)
+    scatter_add(conn, f_el, f_int, sign)
 
 
 @njit(cache=True)

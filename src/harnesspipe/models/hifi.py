@@ -33,8 +33,8 @@ from harnesspipe.fe import contact_explicit as ce
 from harnesspipe.fe.dynamics import DynamicsSettings, integrate
 from harnesspipe.fe.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
-from harnesspipe.fe.shell_bt import (init_shell_state, shell_energies, shell_forces,
-                                     shell_lumped_mass)
+from harnesspipe.fe.shell_bt import (HOURGLASS_COEF, init_shell_state, shell_energies,
+                                     shell_forces, shell_lumped_mass)
 from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
                                          quad_aabbs, segment_aabbs)
 from harnesspipe.models import hifi_mesh as hm
@@ -132,7 +132,6 @@ class BundleSystem:
         self.free = np.ones((n, 6), dtype=np.bool_)
         self.c_damp = float(ex["mass_damping"])
         self.F = np.zeros((len(FAMILIES), n, 6))
-        self._scratch = np.zeros((n, 6))
         self.seg = np.ascontiguousarray(mesh.beam_conn, dtype=np.int64)
         self.seg_r = mesh.wire_radius[mesh.beam_wire].astype(float)
         self.seg_body = mesh.beam_wire.astype(np.int64)
@@ -467,11 +466,8 @@ class BundleSystem:
         """Element forces ON the nodes into ``fi`` (zeroed by the caller)."""
         self.wires.add_forces(self.x, self.quat, fi)         # -f_int of the beams
         if self.has_shells:
-            s = self._scratch
-            s[...] = 0.0
             shell_forces(self.x, v, self.sconn, self.sthick, self.smat, self.sstate, dt,
-                         self.s_el, s)
-            fi -= s
+                         self.s_el, fi, HOURGLASS_COEF, -1.0)
 
     def _contact_forces(self, v, dt, F) -> int:
         itf = self.inp.interface
@@ -600,14 +596,16 @@ class HifiSystem(BundleSystem):
     def external_work(self, t0, t1) -> float:
         """Work of the pins on the system: F_on_system = -force on the pin.  Also adds the
         step's impulse of the pin forces (trapezoidal) for :meth:`observe`."""
-        dc = self.pins.centres - self.c_prev
-        w = -0.5 * float(np.sum((self.f_pin_prev + self.pins.force) * dc))
-        u = self.pins.feeder_displacement()
-        self.impulse += 0.5 * (t1 - t0) * (self.f_pin_prev + self.pins.force)
-        self.impulse_u += 0.5 * (t1 - t0) * (self.u_prev + u)
+        p = self.pins
+        f_sum = self.f_pin_prev + p.force
+        w = -0.5 * float(np.sum(f_sum * (p.centres - self.c_prev)))
+        u = p.feeder_displacement()
+        h = 0.5 * (t1 - t0)
+        self.impulse += h * f_sum
+        self.impulse_u += h * (self.u_prev + u)
         self.impulse_time += t1 - t0
         self.u_prev = u
-        self.f_pin_prev = self.pins.force.copy()
+        self.f_pin_prev[...] = p.force
         return w
 
     def observe(self, t) -> dict:

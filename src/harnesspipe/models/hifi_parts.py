@@ -42,7 +42,6 @@ class Wires:
         self.hist = np.zeros((3, n_el, ng, nf))      # eps_p, alpha, alpha**n per fibre (in place)
         self.f_el = np.zeros((n_el, 12))
         self.nodes = np.unique(self.conn)
-        self._f = np.zeros((int(self.conn.max()) + 1, 6))
 
     def element_radius(self):
         return self.radius[self.sec_id]
@@ -65,14 +64,11 @@ class Wires:
         return beam_stable_step(np.minimum(l, l0), np.pi * r**2, np.pi * r**4 / 4.0,
                                 self.mats[k, 0], self.G[k], self.rho[k])
 
-    def add_forces(self, x, quat, f_internal):
-        """Add the element forces (ON the nodes: minus the internal force)."""
-        f = self._f
-        f[...] = 0.0
+    def add_forces(self, x, quat, f_on_nodes):
+        """Add the element forces ON the nodes (minus the internal force) into ``f_on_nodes``."""
         beam_forces(self.X0, self.conn, self.R0, x, quat, self.xi_g, self.w_g, self.sec_y,
                     self.sec_z, self.sec_area, self.sec_GJ, self.sec_id, self.mats, self.sec_id,
-                    *self.hist, self.f_el, f, numba.get_num_threads())
-        f_internal[:f.shape[0]] -= f
+                    *self.hist, self.f_el, f_on_nodes, numba.get_num_threads(), -1.0)
 
     def plastic_work(self):
         return beam_plastic_work(self.conn, self.X0, self.w_g, self.sec_area, self.sec_id,
