@@ -67,7 +67,7 @@ WW_POINTS = 3           # wire-wire contact points per pair: crossing point, two
 EDGE_TOL = 0.05         # half width (in xi) of the partition-of-unity band at quad edges
 DEFAULT_MAXS = 8
 CHUNK = 64              # items per parallel task (scratch arrays are allocated per task)
-SERIAL_MAX_CHUNKS = 2   # up to this many tasks a loop runs serially (no parallel-region cost)
+SERIAL_MAX_CHUNKS = 1   # up to this many tasks a loop runs serially (no parallel-region cost)
 ENTRY_FRACTION = 0.05    # node-facet: a contact begins at most this far (x (r + t/2)) inside the surface
 REJECT_TOL = 1e-9       # relative slack of the early distance rejects (round-off of the points)
 LM_DAMP = 1e-9          # facet-to-axis projection: Levenberg term (x trace) for facets parallel to a pin
@@ -551,6 +551,29 @@ def _boxes_apart(x, a0, a1, b0, b1, r):
 
 
 @njit(cache=True)
+def _segments_apart(x, a0, a1, b0, b1, r):
+    """True if the segments (a0, a1) and (b0, b1) are farther apart than ``r`` (their
+    closest points, :func:`segment_closest_params`): every contact point of
+    :func:`_segment_points` lies on both segments, so none can touch."""
+    A = B = C = E = F = 0.0
+    for c in range(3):
+        da = x[a1, c] - x[a0, c]
+        db = x[b1, c] - x[b0, c]
+        rc = x[a0, c] - x[b0, c]
+        A += da * da
+        B += da * db
+        C += da * rc
+        E += db * db
+        F += db * rc
+    s, u = segment_closest_params(A, B, C, E, F)
+    d2 = 0.0
+    for c in range(3):
+        d = ((1 - s) * x[a0, c] + s * x[a1, c]) - ((1 - u) * x[b0, c] + u * x[b1, c])
+        d2 += d * d
+    return d2 > (r * (1.0 + REJECT_TOL)) ** 2
+
+
+@njit(cache=True)
 def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag, pts):
     """flag[p] for pairs p0..p1-1: bit k set if contact point k of the pair penetrates;
     for a pair with a flag, its points (:func:`_segment_points`) into ``pts[p]``: rows s,
@@ -568,8 +591,8 @@ def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag, pts):
         b0 = seg[b, 0]
         b1 = seg[b, 1]
         rr = seg_r[a] + seg_r[b]
-        if _boxes_apart(x, a0, a1, b0, b1, rr):     # early reject (most candidates)
-            continue
+        if _boxes_apart(x, a0, a1, b0, b1, rr) or _segments_apart(x, a0, a1, b0, b1, rr):
+            continue                                # early rejects (most candidates)
         m = _segment_points(x, seg, a, b, valence, pts[p, 0], pts[p, 1], pts[p, 2], pts[p, 3])
         pts[p, 3, 2] = m
         f = 0

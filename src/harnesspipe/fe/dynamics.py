@@ -64,39 +64,54 @@ def close_step(F, F_new, du, W, v, minv, free, hdt, m, f):
     """The end of a step: every family's work ``W[p] += 1/2 (F_p + F_new_p) . du``,
     ``F <- F_new``, the total force ``f = sum_p F_new_p`` and the closing half kick
     ``v += hdt M^-1 f``; returns the kinetic energy ``1/2 v . M v`` and the families'
-    total work ``sum_p W[p]``.  One pass over the
-    dofs, all families of a dof together (the families are the integrator's largest
-    arrays: this pass is memory bound)."""
+    total work ``sum_p W[p]``.  Family by family over contiguous memory (the families are
+    the integrator's largest arrays: this pass is memory bound)."""
     P, n, k = F.shape
-    Fp = F.reshape(P, n * k)
-    Fq = F_new.reshape(P, n * k)
-    d = du.reshape(n * k)
-    tot = f.reshape(n * k)
-    vv = v.reshape(n * k)
-    mi = minv.reshape(n * k)
-    mm = m.reshape(n * k)
-    fr = free.reshape(n * k)
-    w = np.zeros(P)
-    ke = 0.0
-    for q in range(n * k):
-        dq = d[q]
-        s = 0.0
-        for p in range(P):
+    N = n * k
+    Fp = F.reshape(P, N)
+    Fq = F_new.reshape(P, N)
+    d = du.reshape(N)
+    tot = f.reshape(N)
+    vv = v.reshape(N)
+    mi = minv.reshape(N)
+    mm = m.reshape(N)
+    fr = free.reshape(N)
+    tot[:] = 0.0
+    w_total = 0.0
+    for p in range(P):
+        wp = 0.0
+        for q in range(N):
             fn = Fq[p, q]
-            w[p] += (Fp[p, q] + fn) * dq
+            wp += (Fp[p, q] + fn) * d[q]
             Fp[p, q] = fn
-            s += fn
-        tot[q] = s
+            tot[q] += fn
+        W[p] += 0.5 * wp
+        w_total += W[p]
+    ke = 0.0
+    for q in range(N):
         if fr[q]:
-            vv[q] += hdt * s * mi[q]
+            vv[q] += hdt * tot[q] * mi[q]
         else:
             vv[q] = 0.0
         ke += mm[q] * vv[q] * vv[q]
-    w_total = 0.0
-    for p in range(P):
-        W[p] += 0.5 * w[p]
-        w_total += W[p]
     return 0.5 * ke, w_total
+
+
+@njit(cache=True)
+def prescribed_work(f_prev, f_now, c_prev, c_now, impulse, h):
+    """Work of prescribed rigid bodies on the system over a step, trapezoidal:
+    ``-1/2 sum (f_prev + f_now) . (c_now - c_prev)`` with ``f`` (n_b, 3) the contact
+    forces ON the bodies and ``c`` their positions; also ``impulse += h (f_prev + f_now)``
+    (``h`` half the step) and ``f_prev <- f_now`` in place.  For a system's
+    ``external_work`` (a few small arrays per step: no NumPy temporaries)."""
+    w = 0.0
+    for i in range(f_now.shape[0]):
+        for k in range(f_now.shape[1]):
+            fs = f_prev[i, k] + f_now[i, k]
+            w -= 0.5 * fs * (c_now[i, k] - c_prev[i, k])
+            impulse[i, k] += h * fs
+            f_prev[i, k] = f_now[i, k]
+    return w
 
 
 @dataclass(frozen=True)

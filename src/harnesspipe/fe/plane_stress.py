@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.hardening import flow_stress, hardening_slope, plastic_increment
+from harnesspipe.fe.hardening import _pow, return_map_from
 
 STATE_SIZE = 6
 P11, P22, P33, P12, EPS_BAR_P, EPS33 = range(STATE_SIZE)
@@ -39,14 +39,17 @@ def _elastic_constants(E, nu):
 
 
 @njit(cache=True)
-def _radial_return(a11, a22, a33, a12, eps_bar_p, G, kappa, sigma_y, K, n, out4, D4):
+def _radial_return(a11, a22, a33, a12, eps_bar_p, sa, G, kappa, sigma_y, K, n, out4, D4,
+                   want_tangent):
     """3D radial return for an elastic trial strain with eps_13 = eps_23 = 0.
 
-    ``a..`` are trial elastic strains (tensor components).  Writes the stress
-    (11, 22, 33, 12) to ``out4`` and the consistent tangent in Voigt form
-    (rows/cols 11, 22, 33, 12; the 12 column acts on the engineering shear) to
-    ``D4``.  Returns (d eps_bar_p, n11, n22, n33, n12) with n the unit normal
-    s_trial/|s_trial| (zero when elastic).
+    ``a..`` are trial elastic strains (tensor components), ``sa = eps_bar_p**n`` (stored
+    history: the flow stress needs no power).  Writes the stress (11, 22, 33, 12) to
+    ``out4`` and the consistent tangent in Voigt form (rows/cols 11, 22, 33, 12; the 12
+    column acts on the engineering shear) to ``D4`` -- with ``want_tangent`` False only
+    its entry (33, 33), which the sigma_33 = 0 iteration needs.  Returns (d eps_bar_p,
+    n11, n22, n33, n12, sa_new) with n the unit normal s_trial/|s_trial| (zero when
+    elastic) and ``sa_new = (eps_bar_p + d eps_bar_p)**n``.
     """
     tr = a11 + a22 + a33
     m = tr / 3.0
@@ -56,13 +59,12 @@ def _radial_return(a11, a22, a33, a12, eps_bar_p, G, kappa, sigma_y, K, n, out4,
     s12 = 2.0 * G * a12
     norm_s = np.sqrt(s11 * s11 + s22 * s22 + s33 * s33 + 2.0 * s12 * s12)
     q_trial = np.sqrt(1.5) * norm_s
-    dg = plastic_increment(q_trial, 3.0 * G, eps_bar_p, sigma_y, K, n)
+    dg, H, sa_new = return_map_from(q_trial, 3.0 * G, eps_bar_p, sa, sigma_y, K, n)
     theta = 1.0
     theta_bar = 0.0
     n11 = n22 = n33 = n12 = 0.0
     if dg > 0.0:
         theta = 1.0 - 3.0 * G * dg / q_trial
-        H = hardening_slope(eps_bar_p + dg, K, n)
         theta_bar = 1.0 / (1.0 + H / (3.0 * G)) - (1.0 - theta)
         n11, n22, n33, n12 = s11 / norm_s, s22 / norm_s, s33 / norm_s, s12 / norm_s
     p = kappa * tr
@@ -70,6 +72,9 @@ def _radial_return(a11, a22, a33, a12, eps_bar_p, G, kappa, sigma_y, K, n, out4,
     out4[1] = p + theta * s22
     out4[2] = p + theta * s33
     out4[3] = theta * s12
+    if not want_tangent:
+        D4[2, 2] = kappa + 2.0 * G * theta * (2.0 / 3.0) - 2.0 * G * theta_bar * n33 * n33
+        return dg, n11, n22, n33, n12, sa_new
     nv = (n11, n22, n33, n12)
     for i in range(4):
         for j in range(4):
@@ -78,7 +83,7 @@ def _radial_return(a11, a22, a33, a12, eps_bar_p, G, kappa, sigma_y, K, n, out4,
                 dev = 0.5
             vol = kappa if i < 3 and j < 3 else 0.0
             D4[i, j] = vol + 2.0 * G * theta * dev - 2.0 * G * theta_bar * nv[i] * nv[j]
-    return dg, n11, n22, n33, n12
+    return dg, n11, n22, n33, n12, sa_new
 
 
 @njit(cache=True)
@@ -90,17 +95,31 @@ def j2_plane_stress(eps, state_old, E, nu, sigma_y, K, n, sig, D, state_new, wor
     and ``work44`` (4, 4) scratch (passed in so that no allocation happens).
     Returns the effective plastic strain increment.
     """
+    ep = state_old[EPS_BAR_P]
+    sa = _pow(ep, n) if (ep > 0.0 and K != 0.0) else 0.0
+    return j2_plane_stress_from(eps, state_old, sa, E, nu, sigma_y, K, n, sig, D, state_new,
+                                work4, work44, True)[0]
+
+
+@njit(cache=True)
+def j2_plane_stress_from(eps, state_old, sa, E, nu, sigma_y, K, n, sig, D, state_new, work4,
+                         work44, want_tangent):
+    """:func:`j2_plane_stress` from a stored ``sa = eps_bar_p**n`` (history of the caller:
+    no power for the flow stress), the tangent ``D`` formed only if ``want_tangent``
+    (an explicit update needs none).  Returns ``(d eps_bar_p, sa_new)``."""
     G, kappa = _elastic_constants(E, nu)
     a11 = eps[0] - state_old[P11]
     a22 = eps[1] - state_old[P22]
     a12 = 0.5 * eps[2] - state_old[P12]
     # elastic plane-stress guess for the through-thickness elastic strain
     a33 = -nu / (1.0 - nu) * (a11 + a22)
-    scale = flow_stress(state_old[EPS_BAR_P], sigma_y, K, n) + E * 1e-12
+    scale = sigma_y + K * sa + E * 1e-12
     dg = 0.0
+    sa_new = sa
     for _ in range(SIGMA33_MAXIT):
-        dg, n11, n22, n33, n12 = _radial_return(a11, a22, a33, a12, state_old[EPS_BAR_P],
-                                                G, kappa, sigma_y, K, n, work4, work44)
+        dg, n11, n22, n33, n12, sa_new = _radial_return(a11, a22, a33, a12, state_old[EPS_BAR_P],
+                                                        sa, G, kappa, sigma_y, K, n, work4,
+                                                        work44, want_tangent)
         if abs(work4[2]) <= SIGMA33_TOL * scale:
             break
         a33 -= work4[2] / work44[2, 2]
@@ -111,13 +130,14 @@ def j2_plane_stress(eps, state_old, E, nu, sigma_y, K, n, sig, D, state_new, wor
     state_new[P12] = state_old[P12] + dg * root * n12
     state_new[EPS_BAR_P] = state_old[EPS_BAR_P] + dg
     state_new[EPS33] = a33 + state_old[P33]  # a33 is the trial elastic strain
-    idx = (0, 1, 3)
     sig[0], sig[1], sig[2] = work4[0], work4[1], work4[3]
-    c33 = work44[2, 2]
-    for i in range(3):
-        for j in range(3):
-            D[i, j] = work44[idx[i], idx[j]] - work44[idx[i], 2] * work44[2, idx[j]] / c33
-    return dg
+    if want_tangent:
+        idx = (0, 1, 3)
+        c33 = work44[2, 2]
+        for i in range(3):
+            for j in range(3):
+                D[i, j] = work44[idx[i], idx[j]] - work44[idx[i], 2] * work44[2, idx[j]] / c33
+    return dg, sa_new
 
 
 @njit(cache=True)

@@ -62,9 +62,11 @@ of :mod:`harnesspipe.fe.plane_stress` are then called with that total strain:
   through-thickness strain ``eps_33`` (elastic Poisson + plastic incompressibility);
   the element thickness is ``h = h0 exp(mean_k eps_33)``.
   Elastic trial states are evaluated in closed form (plane-stress Hooke on
-  ``eps - eps_p``, the exact result of the kernel when it stays elastic); the kernel
-  (Newton on sigma_33 = 0 with the radial return) only runs when the trial state
-  violates the yield condition.
+  ``eps - eps_p``, the exact result of the kernel when it stays elastic) against the
+  flow stress ``sigma_y + K sa`` with ``sa = eps_bar_p**n`` kept in the state
+  (``PT_SA``: no power per point and step); the kernel (Newton on sigma_33 = 0 with
+  the radial return, :func:`j2_plane_stress_from` without the tangent) only runs when
+  the trial state violates the yield condition.
 * Orthotropic elastic eq. 12 (``mat`` = (E1, E2, nu12, G12, 0, 1)): material
   direction 1 is ``axes_ref`` projected on the initial element plane; its angle from
   the initial ``e1`` is stored in the state and convected with the co-rotational
@@ -138,9 +140,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from harnesspipe.fe.hardening import flow_stress
-from harnesspipe.fe.plane_stress import (EPS33, EPS_BAR_P, P11, P12, P22, P33, STATE_SIZE,
-                                         j2_plane_stress, orthotropic_plane_stress,
+from harnesspipe.fe.plane_stress import (EPS33, P11, P12, P22, P33, STATE_SIZE,
+                                         j2_plane_stress_from, orthotropic_plane_stress,
                                          orthotropic_plane_stress_stiffness)
 
 N_THICKNESS = 5
@@ -157,14 +158,15 @@ MAT_J2, MAT_ORTHOTROPIC = 0, 1
 PT_EPS = 0            # total co-rotational strain eps_xx, eps_yy, gamma_xy (3)
 PT_SIG = 3            # stress sigma_xx, sigma_yy, sigma_xy (3), co-rotational frame
 PT_MAT = 6            # plane_stress history (STATE_SIZE = 6): p11 p22 p33 p12 eps_bar_p eps33
-PT_SIZE = PT_MAT + STATE_SIZE   # 12
-_E = N_THICKNESS * PT_SIZE      # 60
+PT_SA = PT_MAT + STATE_SIZE     # eps_bar_p**n (J2: the flow stress without a power)
+PT_SIZE = PT_SA + 1             # 13
+_E = N_THICKNESS * PT_SIZE      # 65
 S_GXZ, S_GYZ = _E, _E + 1                     # total transverse shear strains
 S_HG = _E + 2                                 # 5 hourglass forces: m_x, m_y, b_x, b_y, w
 S_THICK = _E + 7                              # current thickness h
 S_MCOS, S_MSIN = _E + 8, _E + 9               # material axis 1 in the element frame
 S_W_INT, S_W_PLASTIC, S_W_HG = _E + 10, _E + 11, _E + 12
-N_STATE = _E + 13                             # 73
+N_STATE = _E + 13                             # 78
 CHUNK = 32   # elements per parallel task (scratch is allocated once per task)
 PARALLEL_MIN = 128   # below this many elements shell_forces runs the serial kernel
 
@@ -308,13 +310,14 @@ def _element(e, x, v, conn, thick, mat, state, dt, hg, f_el, ef, loc, Dm, eps, s
             sig[1] = c_ps * (a22 + me[1] * a11)
             sig[2] = 0.5 * (1.0 - me[1]) * c_ps * (eps[2] - 2.0 * sold[P12])
             qq = sig[0] * sig[0] + sig[1] * sig[1] - sig[0] * sig[1] + 3.0 * sig[2] * sig[2]
-            fy = flow_stress(sold[EPS_BAR_P], me[2], me[3], me[4])
+            fy = me[2] + me[3] * st[o + PT_SA]          # eq. 2 flow stress
             dg = 0.0
             if qq <= fy * fy:
                 sold[EPS33] = sold[P33] - nu_r * (a11 + a22)
             else:
-                dg = j2_plane_stress(eps, sold, me[0], me[1], me[2], me[3], me[4], sig, Dj,
-                                     st_new, w4, w44)
+                dg, st[o + PT_SA] = j2_plane_stress_from(eps, sold, st[o + PT_SA], me[0], me[1],
+                                                         me[2], me[3], me[4], sig, Dj, st_new,
+                                                         w4, w44, False)
                 for i in range(STATE_SIZE):
                     sold[i] = st_new[i]
             e33 += sold[EPS33]
@@ -533,9 +536,9 @@ def init_shell_state(X, conn, thick, axes_ref=None):
     Thickness ``S_THICK`` = h0; material axis 1 = ``axes_ref`` (n_el, 3) projected on the
     initial element plane (default, or a vector normal to the plane: the element e1).
     Layout: thickness point k at ``k*PT_SIZE`` with ``PT_EPS`` (3 total strains),
-    ``PT_SIG`` (3 stresses), ``PT_MAT`` (6, plane_stress history); then ``S_GXZ``,
-    ``S_GYZ``, ``S_HG`` (5), ``S_THICK``, ``S_MCOS``, ``S_MSIN``, ``S_W_INT``,
-    ``S_W_PLASTIC``, ``S_W_HG``; ``N_STATE`` = 73.
+    ``PT_SIG`` (3 stresses), ``PT_MAT`` (6, plane_stress history), ``PT_SA`` (eps_bar_p**n);
+    then ``S_GXZ``, ``S_GYZ``, ``S_HG`` (5), ``S_THICK``, ``S_MCOS``, ``S_MSIN``,
+    ``S_W_INT``, ``S_W_PLASTIC``, ``S_W_HG``; ``N_STATE`` = 78.
     """
     X = np.ascontiguousarray(X, dtype=float)
     conn = np.ascontiguousarray(conn, dtype=np.int64)

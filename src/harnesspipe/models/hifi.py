@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe.fe import contact_explicit as ce
-from harnesspipe.fe.dynamics import DynamicsSettings, integrate
+from harnesspipe.fe.dynamics import DynamicsSettings, integrate, prescribed_work
 from harnesspipe.fe.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
 from harnesspipe.fe.shell_bt import (HOURGLASS_COEF, init_shell_state, shell_energies,
@@ -597,15 +597,12 @@ class HifiSystem(BundleSystem):
         """Work of the pins on the system: F_on_system = -force on the pin.  Also adds the
         step's impulse of the pin forces (trapezoidal) for :meth:`observe`."""
         p = self.pins
-        f_sum = self.f_pin_prev + p.force
-        w = -0.5 * float(np.sum(f_sum * (p.centres - self.c_prev)))
-        u = p.feeder_displacement()
         h = 0.5 * (t1 - t0)
-        self.impulse += h * f_sum
+        w = prescribed_work(self.f_pin_prev, p.force, self.c_prev, p.centres, self.impulse, h)
+        u = p.feeder_displacement()
         self.impulse_u += h * (self.u_prev + u)
         self.impulse_time += t1 - t0
         self.u_prev = u
-        self.f_pin_prev[...] = p.force
         return w
 
     def observe(self, t) -> dict:
