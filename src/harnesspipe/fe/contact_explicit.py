@@ -727,6 +727,51 @@ def _chain_closest(x, seg, seg_r, e0, e1, c0, ax, R):
 
 
 @njit(cache=True)
+def _chain_pins(x, v, seg, seg_r, chain_start, w, mu, cyl_c, cyl_axis, cyl_R, cyl_v, k_n, k_t,
+                dt, hist_ft, f_n, f_t, part, act, nv, dg, fold, fnew, ds):
+    """Chain ``w`` against every cylinder (:func:`chain_cylinder_contact`): forces on its
+    nodes into ``f_n``, ``f_t``, on the cylinders into ``part[w]``, contacts into act[w]."""
+    n_cyl = cyl_c.shape[0]
+    for c in range(n_cyl):
+        ax = cyl_axis[c]
+        gap, e, s = _chain_closest(x, seg, seg_r, chain_start[w], chain_start[w + 1],
+                                   cyl_c[c], ax, cyl_R[c])
+        if not gap < 0.0:
+            for k in range(3):
+                hist_ft[w, c, k] = 0.0
+            continue
+        act[w] += 1
+        a = seg[e, 0]
+        b = seg[e, 1]
+        for k in range(3):
+            nv[k] = (1.0 - s) * x[a, k] + s * x[b, k] - cyl_c[c, k]
+        al = _dot(nv, ax)
+        for k in range(3):
+            nv[k] -= al * ax[k]
+        dist = math.sqrt(_dot(nv, nv))
+        for k in range(3):
+            nv[k] /= dist
+        pn = -k_n * gap
+        for k in range(3):
+            fnk = pn * nv[k]
+            f_n[a, k] += (1.0 - s) * fnk
+            f_n[b, k] += s * fnk
+            part[w, c, k] -= fnk
+        if k_t <= 0.0 or mu <= 0.0:
+            continue
+        for k in range(3):
+            fold[k] = hist_ft[w, c, k]
+            dg[k] = dt * ((1.0 - s) * v[a, k] + s * v[b, k] - cyl_v[c, k])
+        _to_tangent_plane(fold, dg, nv)
+        coulomb_return_map(fold, dg, k_t, mu, pn, fnew, ds)
+        for k in range(3):
+            hist_ft[w, c, k] = fnew[k]
+            f_t[a, k] -= (1.0 - s) * fnew[k]
+            f_t[b, k] -= s * fnew[k]
+            part[w, c, k] += fnew[k]
+
+
+@njit(cache=True, parallel=True)
 def chain_cylinder_contact(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, cyl_R, cyl_v,
                            k_n, k_t, dt, hist_ft, f_n, f_t, f_cyl):
     """Penalty contact of beam chains (wires) with rigid unbounded cylinders, Coulomb friction.
@@ -743,53 +788,30 @@ def chain_cylinder_contact(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, c
     bent wire slides over a roller).  Friction: Coulomb with ``mu`` (constant, the pins'
     mu_rtb), stick penalty ``k_t``, history ``hist_ft`` (n_chains, n_cyl, 3) in place (reset
     when the contact opens).  ``f_cyl`` (n_cyl, 3): force ON each cylinder, ADDED.
-    Returns the number of active (chain, cylinder) contacts.
+    Returns the number of active (chain, cylinder) contacts.  Parallel over the chains
+    (each moves only its own nodes and history; the cylinders' forces are summed per
+    chain, then in chain order).
     """
     n_cyl = cyl_c.shape[0]
-    nv = np.empty(3)
-    dg = np.empty(3)
-    fold = np.empty(3)
-    fnew = np.empty(3)
-    ds = np.empty(3)
+    n_ch = chain_start.shape[0] - 1
+    part = np.zeros((n_ch, n_cyl, 3))        # force on each cylinder from each chain
+    act = np.zeros(n_ch, dtype=np.int64)
+    size = (n_ch + 1) // 2                   # two tasks (scratch allocated per task)
+    for task in prange(2):
+        nv = np.empty(3)
+        dg = np.empty(3)
+        fold = np.empty(3)
+        fnew = np.empty(3)
+        ds = np.empty(3)
+        for w in range(task * size, min(n_ch, (task + 1) * size)):
+            _chain_pins(x, v, seg, seg_r, chain_start, w, mu, cyl_c, cyl_axis, cyl_R, cyl_v,
+                        k_n, k_t, dt, hist_ft, f_n, f_t, part, act, nv, dg, fold, fnew, ds)
     n_active = 0
-    for w in range(chain_start.shape[0] - 1):
+    for w in range(n_ch):
+        n_active += act[w]
         for c in range(n_cyl):
-            ax = cyl_axis[c]
-            gap, e, s = _chain_closest(x, seg, seg_r, chain_start[w], chain_start[w + 1],
-                                       cyl_c[c], ax, cyl_R[c])
-            if not gap < 0.0:
-                for k in range(3):
-                    hist_ft[w, c, k] = 0.0
-                continue
-            n_active += 1
-            a = seg[e, 0]
-            b = seg[e, 1]
             for k in range(3):
-                nv[k] = (1.0 - s) * x[a, k] + s * x[b, k] - cyl_c[c, k]
-            al = _dot(nv, ax)
-            for k in range(3):
-                nv[k] -= al * ax[k]
-            dist = math.sqrt(_dot(nv, nv))
-            for k in range(3):
-                nv[k] /= dist
-            pn = -k_n * gap
-            for k in range(3):
-                fnk = pn * nv[k]
-                f_n[a, k] += (1.0 - s) * fnk
-                f_n[b, k] += s * fnk
-                f_cyl[c, k] -= fnk
-            if k_t <= 0.0 or mu <= 0.0:
-                continue
-            for k in range(3):
-                fold[k] = hist_ft[w, c, k]
-                dg[k] = dt * ((1.0 - s) * v[a, k] + s * v[b, k] - cyl_v[c, k])
-            _to_tangent_plane(fold, dg, nv)
-            coulomb_return_map(fold, dg, k_t, mu, pn, fnew, ds)
-            for k in range(3):
-                hist_ft[w, c, k] = fnew[k]
-                f_t[a, k] -= (1.0 - s) * fnew[k]
-                f_t[b, k] -= s * fnew[k]
-                f_cyl[c, k] += fnew[k]
+                f_cyl[c, k] += part[w, c, k]
     return n_active
 
 

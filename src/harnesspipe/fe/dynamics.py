@@ -24,7 +24,8 @@ System protocol (duck-typed; see :class:`harnesspipe.models.hifi.HifiSystem`)::
     mass (n, 6), free (n, 6) bool, families: tuple of names
     forces(t, v_half, dt) -> (P, n, 6) array (ON the nodes), in ``families`` order; it
         advances every history (plastic fibres, friction, cohesive damage) in place: it
-        is called once per step and an explicit step is never rejected
+        is called once per step and an explicit step is never rejected; the integrator
+        reads the returned array until the next call (one buffer may be reused)
     advance(du, t) -> None  (moves nodes by du (n, 6) and the rigid bodies to time t)
     external_work(t_old, t_new) -> work of the prescribed bodies on the system over the step
     driven (optional) -> name of the family the prescribed bodies act through
@@ -46,30 +47,59 @@ from harnesspipe.fe.explicit import ExplicitError
 
 
 @njit(cache=True)
-def kick_drift(v, f, minv, free, hdt, h, du):
+def kick_drift(v, f, minv, free, hdt, h, du, F, W):
     """The start of a step: ``v += hdt M^-1 f`` on the free dofs (``f`` (n, 6) the total
-    force) and the drift ``du = h v``; returns nothing."""
-    n, k = f.shape
-    for i in range(n):
-        for j in range(k):
-            if free[i, j]:
-                v[i, j] += hdt * f[i, j] * minv[i, j]
-            else:
-                v[i, j] = 0.0
-            du[i, j] = h * v[i, j]
+    force), the drift ``du = h v`` and the first half of every family's trapezoidal work,
+    ``W[p] += 1/2 F_p . du`` with the forces ``F`` (P, n, 6) at the start of the step."""
+    N = v.size
+    vv = v.reshape(N)
+    ff = f.reshape(N)
+    mi = minv.reshape(N)
+    fr = free.reshape(N)
+    d = du.reshape(N)
+    for q in range(N):
+        if fr[q]:
+            vv[q] += hdt * ff[q] * mi[q]
+        else:
+            vv[q] = 0.0
+        d[q] = h * vv[q]
+    _half_work(F, d, W, d[:0])
 
 
 @njit(cache=True)
-def close_step(F, F_new, du, W, v, minv, free, hdt, m, f):
-    """The end of a step: every family's work ``W[p] += 1/2 (F_p + F_new_p) . du``,
-    ``F <- F_new``, the total force ``f = sum_p F_new_p`` and the closing half kick
-    ``v += hdt M^-1 f``; returns the kinetic energy ``1/2 v . M v`` and the families'
-    total work ``sum_p W[p]``.  Family by family over contiguous memory (the families are
-    the integrator's largest arrays: this pass is memory bound)."""
+def _half_work(F, d, W, tot):
+    """``W[p] += 1/2 F_p . d`` for every family (``d`` flat) and ``tot += sum_p F_p``
+    (flat; pass a zero-size array to skip it), each dot product in four interleaved
+    partial sums (one running sum waits on every addition's latency)."""
+    P = F.shape[0]
+    N = d.size
+    Fp = F.reshape(P, N)
+    N4 = N - N % 4
+    for p in range(P):
+        s0 = s1 = s2 = s3 = 0.0
+        for q in range(0, N4, 4):
+            s0 += Fp[p, q] * d[q]
+            s1 += Fp[p, q + 1] * d[q + 1]
+            s2 += Fp[p, q + 2] * d[q + 2]
+            s3 += Fp[p, q + 3] * d[q + 3]
+        for q in range(N4, N):
+            s0 += Fp[p, q] * d[q]
+        W[p] += 0.5 * ((s0 + s1) + (s2 + s3))
+        if tot.size:
+            for q in range(N):
+                tot[q] += Fp[p, q]
+
+
+@njit(cache=True)
+def close_step(F, du, W, v, minv, free, hdt, m, f):
+    """The end of a step, with the forces ``F`` (P, n, 6) at its end: the second half of
+    every family's work ``W[p] += 1/2 F_p . du``, the total force ``f = sum_p F_p`` and
+    the closing half kick ``v += hdt M^-1 f``; returns the kinetic energy ``1/2 v . M v``
+    and the families' total work ``sum_p W[p]``.  Family by family over contiguous memory
+    (the families are the integrator's largest arrays: this pass is memory bound)."""
     P, n, k = F.shape
     N = n * k
     Fp = F.reshape(P, N)
-    Fq = F_new.reshape(P, N)
     d = du.reshape(N)
     tot = f.reshape(N)
     vv = v.reshape(N)
@@ -77,15 +107,9 @@ def close_step(F, F_new, du, W, v, minv, free, hdt, m, f):
     mm = m.reshape(N)
     fr = free.reshape(N)
     tot[:] = 0.0
+    _half_work(F, d, W, tot)
     w_total = 0.0
     for p in range(P):
-        wp = 0.0
-        for q in range(N):
-            fn = Fq[p, q]
-            wp += (Fp[p, q] + fn) * d[q]
-            Fp[p, q] = fn
-            tot[q] += fn
-        W[p] += 0.5 * wp
         w_total += W[p]
     ke = 0.0
     for q in range(N):
@@ -166,7 +190,7 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
     du = np.zeros_like(m)
     W = np.zeros(len(names))
     dt = settings.safety * system.stable_step()
-    F = system.forces(0.0, v, dt).copy()
+    F = system.forces(0.0, v, dt)
     f = F.sum(axis=0)                   # total force on the nodes
     w_ext = 0.0
     ke_ie = bal_max = 0.0
@@ -183,11 +207,11 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
         if step % settings.recheck_every == 0:
             dt = min(dt, settings.safety * system.stable_step())
         h = min(dt, total_time - t)
-        kick_drift(v, f, minv, free, 0.5 * h, h, du)
+        kick_drift(v, f, minv, free, 0.5 * h, h, du, F, W)
         t_new = t + h
         system.advance(du, t_new)
-        ke, w_total = close_step(F, system.forces(t_new, v, h), du, W, v, minv, free, 0.5 * h,
-                                 m, f)
+        F = system.forces(t_new, v, h)
+        ke, w_total = close_step(F, du, W, v, minv, free, 0.5 * h, m, f)
         w_ext += system.external_work(t, t_new)
         t = t_new
         # KE + sum_p (-W_p) = W_ext; the driven family's absorbed energy includes W_ext
