@@ -292,12 +292,58 @@ def _pin_hist(maxs=4):
     return np.full((1, maxs), -1, dtype=np.int64), np.zeros((1, maxs, 3))
 
 
-def _pin_facets(x, v, quads, t, hist, c, k_n=100.0, k_t=0.0, mu=0.3, dt=1e-3, Rc=2.5):
+def _pin_facets(x, v, quads, t, hist, c, k_n=100.0, k_t=0.0, mu=0.3, dt=1e-3, Rc=2.5,
+                slack=0.0):
     fn, ft, fc = _z(len(x)), _z(len(x)), np.zeros((1, 3))
     n = facets_cylinder_contact(x, v, quads, np.full(len(quads), t), mu, np.array([c], float),
-                                np.array([[0.0, 0, 1]]), np.array([Rc]), np.zeros(1),
+                                np.array([[0.0, 0, 1]]), np.array([Rc]), np.array([slack]),
                                 np.zeros((1, 3)), k_n, k_t, dt, hist[0], hist[1], fn, ft, fc)
     return n, fn, ft, fc
+
+
+def _quads_along_pin(n_q, y, half=1.0, pitch=3.0):
+    """``n_q`` separate unit quads in the xz plane at height y, one behind the other along
+    the pin's axis (z), with gaps between them: ``n_q`` patches on one pin."""
+    x, quads = [], []
+    for i in range(n_q):
+        z = (i - (n_q - 1) / 2) * pitch
+        quads.append(len(x) + np.arange(4))
+        x += [[-half, y, z - half], [half, y, z - half], [half, y, z + half], [-half, y, z + half]]
+    return np.array(x), np.array(quads)
+
+
+def test_pin_slack_shifts_the_contact_by_its_allowance():
+    """A pin slack s (the strain-free start of a pin resting in the soft minimum) moves the
+    contact's onset by s: force k (pen - s) while pen > s, none once s > pen."""
+    Rc, t, pen, k_n = 2.5, 0.27, 0.05, 400.0
+    x, quads = _quads_along_pin(1, Rc + t / 2 - pen)
+    for slack, force in ((0.0, k_n * pen), (0.02, k_n * (pen - 0.02)), (0.06, 0.0), (0.5, 0.0)):
+        n, fn, _, fc = _pin_facets(x, _z(len(x)), quads, t, _pin_hist(), [0.0, 0.0, 0.0],
+                                   k_n=k_n, Rc=Rc, slack=slack)
+        assert n == (1 if force > 0.0 else 0)
+        assert fn[:, 1].sum() == pytest.approx(force, abs=1e-12)
+        assert np.allclose(fc[0], -fn[:, :3].sum(axis=0))
+
+
+def test_patches_beyond_the_history_slots_keep_their_normal_force():
+    """Five separate quads on one pin with four history slots: all five patches push
+    (k pen each), the first four also carry friction (stick k_t dg against a slide along
+    the pin), the fifth is frictionless -- it has no slot to remember its force."""
+    Rc, t, pen, k_n, k_t, dt, V = 2.5, 0.27, 0.04, 400.0, 300.0, 1e-3, 1.0
+    x, quads = _quads_along_pin(5, Rc + t / 2 - pen)
+    v = _z(len(x))
+    v[:, 2] = V
+    hist = _pin_hist(maxs=4)
+    n, fn, ft, fc = _pin_facets(x, v, quads, t, hist, [0.0, 0.0, 0.0], k_n=k_n, k_t=k_t,
+                                mu=0.5, dt=dt, Rc=Rc)
+    assert n == 5
+    for q in quads:
+        assert fn[q, 1].sum() == pytest.approx(k_n * pen, rel=1e-12)
+    for q in quads[:4]:
+        assert ft[q, 2].sum() == pytest.approx(-k_t * V * dt, rel=1e-12)
+    assert not ft[quads[4]].any()
+    assert sorted(hist[0][0]) == [0, 1, 2, 3]
+    assert np.allclose(fc[0], -(fn + ft)[:, :3].sum(axis=0))
 
 
 def _soft_gap(x, quads, t, c, Rc):

@@ -975,14 +975,19 @@ def _patch_contact(prj_all, patch, m, p, weight):
 
 
 @njit(cache=True)
+def _patch_scratch(n_q):
+    """Work arrays of the pin-facet kernels for a set of ``n_q`` quads: candidate ids,
+    their closest points and gaps (:func:`_facets_near`), patch ids and soft-minimum
+    weights."""
+    return (np.empty(n_q, dtype=np.int64), np.empty((n_q, 7)), np.empty(n_q, dtype=np.int64),
+            np.empty(n_q))
+
+
+@njit(cache=True)
 def facets_cylinder_gaps(x, quads, quad_t, cyl_c, cyl_axis, cyl_R):
     """Smallest patch gap G (:func:`facets_cylinder_contact`) of the set at each cylinder
     (np.inf where no quad is near): negative where a pin starts inside the soft minimum."""
-    n_q = quads.shape[0]
-    cand = np.empty(n_q, dtype=np.int64)
-    prj_all = np.empty((n_q, 7))
-    patch = np.empty(n_q, dtype=np.int64)
-    weight = np.empty(n_q)
+    cand, prj_all, patch, weight = _patch_scratch(quads.shape[0])
     gaps = np.full(cyl_c.shape[0], np.inf)
     for c in range(cyl_c.shape[0]):
         m = _facets_near(x, quads, quad_t, cyl_c[c], cyl_axis[c], cyl_R[c], cand, prj_all)
@@ -1035,11 +1040,7 @@ def facets_cylinder_contact(x, v, quads, quad_t, mu, cyl_c, cyl_axis, cyl_R, cyl
     """
     n_cyl = cyl_c.shape[0]
     maxs = hist_q.shape[1]
-    n_q = quads.shape[0]
-    cand = np.empty(n_q, dtype=np.int64)
-    prj_all = np.empty((n_q, 7))
-    patch = np.empty(n_q, dtype=np.int64)
-    weight = np.empty(n_q)
+    cand, prj_all, patch, weight = _patch_scratch(quads.shape[0])
     slot_q = np.empty(maxs, dtype=np.int64)
     slot_f = np.empty((maxs, 3))
     nv = np.empty(3)
