@@ -41,6 +41,7 @@ class Wires:
         n_el, ng, nf = self.conn.shape[0], self.xi_g.size, self.sec_y.shape[1]
         self.hist = np.zeros((3, n_el, ng, nf))      # eps_p, alpha, alpha**n per fibre (in place)
         self.f_el = np.zeros((n_el, 12))
+        self.n_chunks = numba.get_num_threads()   # element chunks (any number gives the same forces)
         self.nodes = np.unique(self.conn)
 
     def element_radius(self):
@@ -68,7 +69,7 @@ class Wires:
         """Add the element forces ON the nodes (minus the internal force) into ``f_on_nodes``."""
         beam_forces(self.X0, self.conn, self.R0, x, quat, self.xi_g, self.w_g, self.sec_y,
                     self.sec_z, self.sec_area, self.sec_GJ, self.sec_id, self.mats, self.sec_id,
-                    *self.hist, self.f_el, f_on_nodes, numba.get_num_threads(), -1.0)
+                    *self.hist, self.f_el, f_on_nodes, self.n_chunks, -1.0)
 
     def plastic_work(self):
         return beam_plastic_work(self.conn, self.X0, self.w_g, self.sec_area, self.sec_id,
