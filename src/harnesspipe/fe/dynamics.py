@@ -96,7 +96,7 @@ def close_step(F, du, W, v, minv, free, hdt, m, f):
     every family's work ``W[p] += 1/2 F_p . du``, the total force ``f = sum_p F_p`` and
     the closing half kick ``v += hdt M^-1 f``; returns the kinetic energy ``1/2 v . M v``
     and the families' total work ``sum_p W[p]``.  Family by family over contiguous memory
-    (the families are the integrator's largest arrays: this pass is memory bound)."""
+    (:func:`_half_work`; the families are the integrator's largest arrays)."""
     P, n, k = F.shape
     N = n * k
     Fp = F.reshape(P, N)
