@@ -512,6 +512,41 @@ def _pin(x, v, seg, hist, k_n=500.0, k_t=0.0, mu=0.3, dt=1e-3, Rc=2.5):
     return n, fn, ft, fc
 
 
+def test_chains_on_a_pin_act_independently_and_the_pin_gets_their_sum():
+    """Five wires (two tasks of chains: 3 + 2) pressed onto one roller by different amounts
+    and sliding at different speeds: each wire's forces and friction history are those it
+    gets alone, and the force on the roller is minus the sum over the wires."""
+    Rc, k_n, k_t, mu, dt = 2.5, 500.0, 300.0, 0.3, 1e-3
+    xs = np.array([-16.5, -6.5, 3.5, 13.5])
+    pens = np.array([0.01, 0.02, -0.05, 0.03, 0.015])       # the third one is clear
+    wires = [_chain(xs, Rc + R_W - pen) for pen in pens]
+    for i, (x, _) in enumerate(wires):
+        x[:, 2] = 3.0 * i                                    # along the roller's axis
+    x = np.vstack([w[0] for w in wires])
+    seg = np.vstack([w[1] + 4 * i for i, w in enumerate(wires)])
+    v = _z(len(x))
+    v[:, 0] = np.repeat(0.1 * np.arange(1, 6), 4)
+    start = np.arange(0, len(seg) + 1, 3)
+    cyl = (np.zeros((1, 3)), np.array([[0.0, 0, 1]]), np.array([Rc]), np.zeros((1, 3)))
+    hist, fn, ft, fc = np.zeros((5, 1, 3)), _z(len(x)), _z(len(x)), np.zeros((1, 3))
+    for _ in range(3):                                       # history carried over steps
+        fn[:], ft[:], fc[:] = 0.0, 0.0, 0.0
+        n = chain_cylinder_contact(x, v, seg, np.full(len(seg), R_W), start, mu, *cyl, k_n,
+                                   k_t, dt, hist, fn, ft, fc)
+    assert n == 4
+    for i, (xi, si) in enumerate(wires):
+        h1 = np.zeros((1, 1, 3))
+        for _ in range(3):
+            fni, fti = _z(4), _z(4)
+            chain_cylinder_contact(xi, v[4 * i:4 * i + 4], si, np.full(3, R_W), np.array([0, 3]),
+                                   mu, *cyl, k_n, k_t, dt, h1, fni, fti, np.zeros((1, 3)))
+        np.testing.assert_array_equal(fn[4 * i:4 * i + 4], fni)
+        np.testing.assert_array_equal(ft[4 * i:4 * i + 4], fti)
+        np.testing.assert_array_equal(hist[i], h1[0])
+        assert (fni[:, 1].sum() > 0.0) == (pens[i] > 0.0)
+    np.testing.assert_allclose(fc[0], -(fn + ft)[:, :3].sum(axis=0), rtol=1e-12, atol=1e-12)
+
+
 def test_wire_resting_on_a_roller_between_its_nodes_is_held():
     """A wire of 10 mm elements across a 5 mm roller, nodes 3.5 and 6.5 mm from its axis: the
     nodes alone never touch it (the wire would fall through); the chain contact carries the

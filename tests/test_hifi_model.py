@@ -209,6 +209,21 @@ def test_case_loading_time_scale_and_explicit_override():
     assert inputs(cfg, "twb19_t2", {"t_total": "0.5"}).explicit["t_total"] == 0.5
 
 
+def test_wires_sharing_a_node_are_rejected():
+    """The pins meet the wires chain by chain in parallel: a mesh whose wires share a node
+    (two chains would move it at once) is refused with a clear error."""
+    from harnesspipe.models import hifi_mesh as hm
+    from harnesspipe.models.hifi import HifiSystem
+    from harnesspipe.stages.hifi import inputs
+    inp = inputs(load(overrides={"profile": "quick"}), "twb19_t2", {})
+    mesh = hm.build_mesh(inp.case, inp.config, inp.resolution)
+    HifiSystem(mesh, inp)                                    # as meshed: accepted
+    first = np.flatnonzero(mesh.beam_wire == 1)[0]
+    mesh.beam_conn[first, 0] = mesh.beam_conn[0, 0]          # wire 1 starts on wire 0's node
+    with pytest.raises(ValueError, match="must not share nodes"):
+        HifiSystem(mesh, inp)
+
+
 def test_unstable_run_fails_with_diagnostics_and_writes_nothing(tmp_path):
     r = _cli("--case", "cwb19_t2_closed", "--profile", "quick", "--set", "safety=4.0",
              "--set", "t_total=0.05", "--out", str(tmp_path / "a.csv"),

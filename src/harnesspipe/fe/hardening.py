@@ -90,13 +90,13 @@ def return_map_from(q_trial, c, eps_p_old, sa, sigma_y, K, n):
         m = 1.0 / n
         s = sa                          # unknown s = e**n, h(s) = A - K s - c s**m
         hi = A / K                      # h(hi) < 0
-        e = a
+        e = _pow(s, m) if s > 0.0 else 0.0
         for _ in range(RETURN_MAXIT):
-            e = _pow(s, m) if s > 0.0 else 0.0
             h = A - K * s - c * e
             if abs(h) <= tol:
                 break
             s = min(max(s + h / (K + (c * m * e / s if s > 0.0 else 0.0)), sa), hi)
+            e = _pow(s, m) if s > 0.0 else 0.0     # (e, s) stay a pair, converged or not
         dg = e - a if e > a else 0.0
         if e <= EPS_P_FLOOR:
             return dg, hardening_slope(e, K, n), s

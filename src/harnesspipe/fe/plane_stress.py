@@ -73,7 +73,7 @@ def _radial_return(a11, a22, a33, a12, eps_bar_p, sa, G, kappa, sigma_y, K, n, o
     out4[2] = p + theta * s33
     out4[3] = theta * s12
     if not want_tangent:
-        D4[2, 2] = kappa + 2.0 * G * theta * (2.0 / 3.0) - 2.0 * G * theta_bar * n33 * n33
+        D4[2, 2] = kappa + 2.0 * G * theta * (1.0 - 1.0 / 3.0) - 2.0 * G * theta_bar * n33 * n33
         return dg, n11, n22, n33, n12, sa_new
     nv = (n11, n22, n33, n12)
     for i in range(4):

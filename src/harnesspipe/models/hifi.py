@@ -570,6 +570,10 @@ class HifiSystem(BundleSystem):
         if np.any(np.diff(body) < 0) or np.any(self.seg[1:, 0][body[1:] == body[:-1]]
                                                 != self.seg[:-1, 1][body[1:] == body[:-1]]):
             raise ValueError("hi-fi mesh: wire segments must run consecutively along each wire")
+        node_body = np.unique(np.c_[self.seg.ravel(), np.repeat(body, 2)], axis=0)
+        if np.unique(node_body[:, 0]).size != node_body.shape[0]:
+            raise ValueError("hi-fi mesh: wires must not share nodes (the pin contact moves "
+                             "the wires' nodes in parallel, wire by wire)")
         start = np.searchsorted(body, np.arange(self.mesh.n_wires + 1)).astype(np.int64)
         return dict(start=start, mu=float(self.inp.interface["mu_rtb"]),
                     k=self._penalty(m[:self.nw]), hist=np.zeros((self.mesh.n_wires, 3, 3)))
