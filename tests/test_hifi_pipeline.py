@@ -461,7 +461,7 @@ def test_virtual_test_reuses_the_fits_run_only_when_it_is_the_same_run(tmp_path,
 
 def test_hifi_report_section(tmp_path, fake):
     from harnesspipe import config as cfgmod
-    from harnesspipe.report.html import _measured_by_case, hifi_section
+    from harnesspipe.report.html import COHESIVE_MESH_NOTE, _measured_by_case, hifi_section
     cfg = cfgmod.load()
     assert "No hi-fi results yet" in hifi_section(tmp_path, cfg, {})
     u = np.linspace(0.0, 30.0, 101)
@@ -470,9 +470,18 @@ def test_hifi_report_section(tmp_path, fake):
                         tmp_path / "hifi" / "virtual" / "cwb19_t2_closed", reference=ref, runner=runner_of(fake))
     (tmp_path / "hifi" / "interface.csv").write_text(
         "parameter,value\n" + "".join(f"{k},{v}\n" for k, v in fake.TRUTH.items()))
+    for item in ("mu_rtb", "cohesive"):        # two chain steps; only the cohesive one has the note
+        step = tmp_path / "hifi" / "chain" / item
+        step.mkdir(parents=True)
+        (step / "fit.json").write_text(json.dumps(
+            {"item": item, "method": "test", "cases": [], "window": [0.0, 30.0], "error_l2": 0.1,
+             "error_rel": 0.01, "nfev": 1, "converged": True, "parameters": {"mu_rtb": 0.3}}))
+        (step / "curve.csv").write_text("case,deflection_mm,force_N\n")
     page = hifi_section(tmp_path, cfg, _measured_by_case([ref]))
     assert "virtual test cwb19_t2_closed" in page and "Calibrated interface" in page and "Cost" in page
     assert page.count("data:image/png;base64,") >= 2 and "281 min" in page
+    cohesive = page.index("Calibration step cohesive")
+    assert page.count(COHESIVE_MESH_NOTE) == 1 and page.index(COHESIVE_MESH_NOTE) > cohesive
 
 
 # --------------------------------------------------------------------------- the rules
