@@ -570,8 +570,7 @@ class HifiSystem(BundleSystem):
         if np.any(np.diff(body) < 0) or np.any(self.seg[1:, 0][body[1:] == body[:-1]]
                                                 != self.seg[:-1, 1][body[1:] == body[:-1]]):
             raise ValueError("hi-fi mesh: wire segments must run consecutively along each wire")
-        node_body = np.unique(np.c_[self.seg.ravel(), np.repeat(body, 2)], axis=0)
-        if np.unique(node_body[:, 0]).size != node_body.shape[0]:
+        if np.unique(self.seg).size != self.seg.shape[0] + self.mesh.n_wires:   # s + 1 nodes a wire
             raise ValueError("hi-fi mesh: wires must not share nodes (the pin contact moves "
                              "the wires' nodes in parallel, wire by wire)")
         start = np.searchsorted(body, np.arange(self.mesh.n_wires + 1)).astype(np.int64)

@@ -239,8 +239,8 @@ COHESIVE_MESH_NOTE = (
     "moves with the mesh and with the mass scaling: on the coarse-taped CWB a finer mesh differs "
     "from the default one by up to 8 % of the peak at 21-25 mm, and f_m 10 from the paper's f_m 25 "
     "by up to 22 % beyond 20 mm (the lighter model debonds further), while below 20 mm they agree "
-    "within 3.4 % (mesh) and 2.7 % on 1 mm means (f_m) (bench/RESULTS.md, taped CWB). The fitted cohesive values carry an "
-    "uncertainty of that order.</p>")
+    "within 3.4 % (mesh) and 2.7 % on 1 mm means (f_m) (bench/RESULTS.md, taped CWB). The fitted "
+    "cohesive values carry an uncertainty of that order.</p>")
 
 
 def hifi_section(results: Path, cfg: dict, measured: dict) -> str:
