@@ -251,38 +251,55 @@ def beam_forces(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area, sec_GJ
     (n_el, 12) scratch; ``n_chunks`` the number of parallel chunks
     (``numba.get_num_threads()``).
 
-    Lean force-only path (:func:`element_force`).  Each chunk takes a contiguous range
-    of elements, so the rotation matrix of a node shared with the previous element of a
-    chain (``conn[e, 0] == conn[e - 1, 1]``) is reused, not rebuilt from its quaternion.
-    With fewer than ``PARALLEL_MIN_EL`` elements per chunk the chunks are merged.
+    Lean force-only path (:func:`element_force`) over contiguous chunks of elements
+    (:func:`beam_range_forces`).  With fewer than ``PARALLEL_MIN_EL`` elements per chunk
+    the chunks are merged.
     """
     n_el = conn.shape[0]
     n_chunks = max(1, min(n_chunks, n_el // PARALLEL_MIN_EL))
     size = (n_el + n_chunks - 1) // n_chunks
     for c in prange(n_chunks):
-        W = np.empty((4, 3, 3))
-        Rbar = np.empty((3, 3))
-        Rg = np.empty((2, 3, 3))
-        th1 = np.empty(3)
-        th2 = np.empty(3)
-        v4 = np.empty(4)
-        last = -1                       # node whose matrix is in Rg[1 - ia]
-        ia = 0                          # Rg[ia] holds node a, Rg[1 - ia] node b
-        for e in range(c * size, min(n_el, (c + 1) * size)):
-            a = conn[e, 0]
-            b = conn[e, 1]
-            k = sec_id[e]
-            m = mat_id[e]
-            if a == last:               # node a was node b of the previous element
-                ia = 1 - ia
-            else:
-                _quat_to_matrix_at(quat, a, Rg, ia)
-            _quat_to_matrix_at(quat, b, Rg, 1 - ia)
-            last = b
-            element_force(e, a, b, X0, x, R0, Rg, ia, 1 - ia, xi_g, w_g, sec_y[k], sec_z[k],
-                          sec_area[k], sec_GJ[k], mats[m, 0], mats[m, 1], mats[m, 2], mats[m, 3],
-                          eps_p, alpha, sa_h, f_el, W, Rbar, th1, th2, v4)
-    for e in range(n_el):
+        beam_range_forces(c * size, min(n_el, (c + 1) * size), X0, conn, R0, x, quat, xi_g,
+                          w_g, sec_y, sec_z, sec_area, sec_GJ, sec_id, mats, mat_id, eps_p,
+                          alpha, sa_h, f_el)
+    beam_scatter(conn, f_el, f_int, sign)
+
+
+@njit(cache=True)
+def beam_range_forces(lo, hi, X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area,
+                      sec_GJ, sec_id, mats, mat_id, eps_p, alpha, sa_h, f_el):
+    """Element forces of elements ``lo..hi-1`` into ``f_el`` (arguments as
+    :func:`beam_forces`).  The rotation matrix of a node shared with the previous
+    element of a chain (``conn[e, 0] == conn[e - 1, 1]``) is reused, not rebuilt from
+    its quaternion; scratch is allocated once per call."""
+    W = np.empty((4, 3, 3))
+    Rbar = np.empty((3, 3))
+    Rg = np.empty((2, 3, 3))
+    th1 = np.empty(3)
+    th2 = np.empty(3)
+    v4 = np.empty(4)
+    last = -1                       # node whose matrix is in Rg[1 - ia]
+    ia = 0                          # Rg[ia] holds node a, Rg[1 - ia] node b
+    for e in range(lo, hi):
+        a = conn[e, 0]
+        b = conn[e, 1]
+        k = sec_id[e]
+        m = mat_id[e]
+        if a == last:               # node a was node b of the previous element
+            ia = 1 - ia
+        else:
+            _quat_to_matrix_at(quat, a, Rg, ia)
+        _quat_to_matrix_at(quat, b, Rg, 1 - ia)
+        last = b
+        element_force(e, a, b, X0, x, R0, Rg, ia, 1 - ia, xi_g, w_g, sec_y[k], sec_z[k],
+                      sec_area[k], sec_GJ[k], mats[m, 0], mats[m, 1], mats[m, 2], mats[m, 3],
+                      eps_p, alpha, sa_h, f_el, W, Rbar, th1, th2, v4)
+
+
+@njit(cache=True)
+def beam_scatter(conn, f_el, f_int, sign):
+    """``f_int[node] += sign f_el`` over the elements' two nodes, in element order."""
+    for e in range(conn.shape[0]):
         a = conn[e, 0]
         b = conn[e, 1]
         for i in range(6):

@@ -453,11 +453,7 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
     Returns the number of pairs with at least one active contact point.
     """
     n_pairs = pairs.shape[0]
-    n_nodes = x.shape[0]
-    valence = np.zeros(n_nodes, dtype=np.int64)
-    for e in range(seg.shape[0]):
-        valence[seg[e, 0]] += 1
-        valence[seg[e, 1]] += 1
+    valence = _valence(seg, x.shape[0])
     # phase 1: which pairs touch, and at which of their points (kept for phase 2)
     flag = np.empty(n_pairs, dtype=np.int8)
     pts = np.empty((n_pairs, 4, WW_POINTS))   # s, u, weight per point; beta, beta' (row 3)
@@ -468,16 +464,8 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
         for ch in prange(n_chunks):
             _ww_flags(x, seg, seg_r, seg_body, pairs, valence, ch * CHUNK,
                       min(n_pairs, (ch + 1) * CHUNK), flag, pts)
-    n_act = 0
-    for p in range(n_pairs):
-        if flag[p] != 0:
-            n_act += 1
-    idx = np.empty(n_act, dtype=np.int64)
-    j = 0
-    for p in range(n_pairs):
-        if flag[p] != 0:
-            idx[j] = p
-            j += 1
+    idx = _touching(flag)
+    n_act = idx.size
     # phase 2: forces and friction of the touching pairs only
     pfn = np.empty((n_act, WW_POINTS, 3))     # weighted normal force on a's point
     pft = np.empty((n_act, WW_POINTS, 3))     # weighted friction force on a's point
@@ -493,11 +481,70 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
             _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c,
                        dt, dt_phys, hist_partner, hist_ft, ch * CHUNK,
                        min(n_act, (ch + 1) * CHUNK), pfn, pft, hnew, pdu)
-    # serial: commit history, scatter forces (in pair order)
+    _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner, hist_ft,
+               f_n, f_t)
+    return n_act
+
+
+@njit(cache=True)
+def beam_beam_contact_serial(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d_c,
+                             dt, time_scale, hist_partner, hist_ft, f_n, f_t):
+    """Serial twin of :func:`beam_beam_contact` (for a caller that runs it beside other
+    work); the same phases, the same arithmetic, the same results."""
+    n_pairs = pairs.shape[0]
+    valence = _valence(seg, x.shape[0])
+    flag = np.empty(n_pairs, dtype=np.int8)
+    pts = np.empty((n_pairs, 4, WW_POINTS))
+    _ww_flags(x, seg, seg_r, seg_body, pairs, valence, 0, n_pairs, flag, pts)
+    idx = _touching(flag)
+    n_act = idx.size
+    pfn = np.empty((n_act, WW_POINTS, 3))
+    pft = np.empty((n_act, WW_POINTS, 3))
+    hnew = np.empty((n_act, WW_POINTS, 3))
+    pdu = np.empty(n_act)
+    _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c, dt,
+               dt * time_scale, hist_partner, hist_ft, 0, n_act, pfn, pft, hnew, pdu)
+    _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner, hist_ft,
+               f_n, f_t)
+    return n_act
+
+
+@njit(cache=True)
+def _valence(seg, n_nodes):
+    """Number of segments at each node."""
+    valence = np.zeros(n_nodes, dtype=np.int64)
+    for e in range(seg.shape[0]):
+        valence[seg[e, 0]] += 1
+        valence[seg[e, 1]] += 1
+    return valence
+
+
+@njit(cache=True)
+def _touching(flag):
+    """Indices of the nonzero flags, in order."""
+    n_act = 0
+    for p in range(flag.size):
+        if flag[p] != 0:
+            n_act += 1
+    idx = np.empty(n_act, dtype=np.int64)
+    j = 0
+    for p in range(flag.size):
+        if flag[p] != 0:
+            idx[j] = p
+            j += 1
+    return idx
+
+
+@njit(cache=True)
+def _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner, hist_ft,
+               f_n, f_t):
+    """The serial end of the wire-wire contact: the new friction history of the touching
+    pairs replaces the old one, and their point forces go to the segments' end nodes
+    (in pair order)."""
     for i in range(hist_partner.shape[0]):
         for s in range(hist_partner.shape[1]):
             hist_partner[i, s] = -1
-    for j in range(n_act):
+    for j in range(idx.size):
         p = idx[j]
         a = pairs[p, 0]
         b = pairs[p, 1]
@@ -531,7 +578,6 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
                 f_t[a1, c] += s * ft
                 f_t[b0, c] -= (1 - u) * ft
                 f_t[b1, c] -= u * ft
-    return n_act
 
 
 @njit(cache=True)

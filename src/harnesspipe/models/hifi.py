@@ -34,16 +34,18 @@ from harnesspipe.fe.dynamics import DynamicsSettings, integrate, prescribed_work
 from harnesspipe.fe.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
 from harnesspipe.fe.shell_bt import (HOURGLASS_COEF, init_shell_state, shell_energies,
-                                     shell_forces, shell_lumped_mass)
+                                     shell_lumped_mass)
 from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
                                          quad_aabbs, segment_aabbs)
 from harnesspipe.models import hifi_mesh as hm
+from harnesspipe.models.bundle_lanes import BeamSplit, check_disjoint, element_and_wire_contact
 from harnesspipe.models.hifi_parts import Pins, Wires
 from harnesspipe.models.tube_equivalent import from_config as tube_equivalent
 
 FAMILIES = ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive", "damping")
 MAX_LIGHT_SCALE = 16.0   # cap of the selective shell mass scaling (the tape on its bond needs ~13)
 PIN_PATCHES = 4          # contacts of one shell part with one pin at most (connected patches: an open tube's lips)
+LANES_PHASE = "elements and wire-wire contact"   # one phase: they run in concurrent lanes
 TIE_TOL = {hm.TIE_COVERING: 0.3, hm.TIE_WIRES: 0.5, hm.TIE_TAPE: 0.3}   # mm: facet chord sag / hexagonal bundle under a round band
 
 
@@ -124,11 +126,13 @@ class BundleSystem:
         self.mass = np.zeros((n, 6))
         self.wires.add_mass(self.mass)
         self.has_shells = mesh.shell_conn.shape[0] > 0
-        if self.has_shells:
-            self.sconn = np.ascontiguousarray(mesh.shell_conn, dtype=np.int64)
-            self.smat, self.sthick, self.srho = self._shell_materials()
-            self.sstate = init_shell_state(mesh.X, self.sconn, self.sthick, mesh.shell_axis)
-            self.s_el = np.zeros((self.sconn.shape[0], 4, 6))
+        self.sconn = np.ascontiguousarray(mesh.shell_conn, dtype=np.int64).reshape(-1, 4)
+        check_disjoint(self.wires.conn, self.sconn)
+        self.beam_split = BeamSplit(self.wires.conn.shape[0])
+        self.smat, self.sthick, self.srho = self._shell_materials()    # (empty without shells)
+        self.sstate = init_shell_state(mesh.X, self.sconn, self.sthick,
+                                       np.asarray(mesh.shell_axis, dtype=float).reshape(-1, 3))
+        self.s_el = np.zeros((self.sconn.shape[0], 4, 6))
         self.free = np.ones((n, 6), dtype=np.bool_)
         self.c_damp = float(ex["mass_damping"])
         self.F = np.zeros((len(FAMILIES), n, 6))
@@ -140,7 +144,8 @@ class BundleSystem:
         self.shell_mass_scale = self._scale_to_wire_step()
         self.dt0 = 2.0 / np.sqrt(self.node_omega2().max())
         self._setup_contacts()
-        self.phase = {k: 0.0 for k in ("elements", "contact search", "contact forces", "cohesive")}
+        self.phase = {k: 0.0 for k in (LANES_PHASE, "contact search", "other contact forces",
+                                       "cohesive")}
         self.pairs_max = 0
         self.active = 0
 
@@ -446,36 +451,41 @@ class BundleSystem:
         if self.x_search is None or max_drift2(self.x, self.x_search) > (0.5 * self.margin) ** 2:
             self._search()          # some pair may have closed in by a margin: search anew
         t1 = clock()
-        self._element_forces(v, dt, F[0])
+        active = self._element_and_wire_contact_forces(v, dt, F)
         t2 = clock()
-        active = self._contact_forces(v, dt, F)
+        self.beam_split.record(t2 - t1)
+        active += self._contact_forces(v, dt, F)
         t3 = clock()
         self._cohesive_forces(F[5])
         if self.c_damp > 0.0:
             np.multiply(self.mass, v, out=F[6])
             F[6] *= -self.c_damp
         t4 = clock()
-        for name, a, b in (("contact search", t0, t1), ("elements", t1, t2),
-                           ("contact forces", t2, t3), ("cohesive", t3, t4)):
+        for name, a, b in (("contact search", t0, t1), (LANES_PHASE, t1, t2),
+                           ("other contact forces", t2, t3), ("cohesive", t3, t4)):
             self.phase[name] += b - a
         self.active = active
         self.pairs_max = max(self.pairs_max, active)
         return F
 
-    def _element_forces(self, v, dt, fi):
-        """Element forces ON the nodes into ``fi`` (zeroed by the caller)."""
-        self.wires.add_forces(self.x, self.quat, fi)         # -f_int of the beams
-        if self.has_shells:
-            shell_forces(self.x, v, self.sconn, self.sthick, self.smat, self.sstate, dt,
-                         self.s_el, fi, HOURGLASS_COEF, -1.0)
+    def _element_and_wire_contact_forces(self, v, dt, F) -> int:
+        """Beam and shell forces ON the nodes into ``F[0]``, the wire-wire contact into
+        ``F[1]``, ``F[2]``, in two concurrent lanes (:mod:`harnesspipe.models.bundle_lanes`);
+        returns the number of touching wire-wire pairs."""
+        w, itf = self.wires, self.inp.interface
+        return element_and_wire_contact(
+            w.X0, w.conn, w.R0, self.x, self.quat, w.xi_g, w.w_g, w.sec_y, w.sec_z, w.sec_area,
+            w.sec_GJ, w.sec_id, w.mats, *w.hist, w.f_el, self.beam_split.current(),
+            v, self.sconn, self.sthick, self.smat, self.sstate, dt, self.s_el, HOURGLASS_COEF,
+            self.seg, self.seg_r, self.seg_body, self.ww_pairs, self.k_ww, self.k_ww,
+            itf["mu_s"], itf["mu_k"], itf["d_c"], self.time_scale, self.ww_hist[0],
+            self.ww_hist[1], F[0], F[1], F[2])
 
     def _contact_forces(self, v, dt, F) -> int:
-        itf = self.inp.interface
+        """The contacts not in the lanes: the open tube's cut, the node-facet sets and the
+        loading's contacts."""
         fn, ft = F[1], F[2]
-        active = ce.beam_beam_contact(self.x, v, self.seg, self.seg_r, self.seg_body,
-                                      self.ww_pairs, self.k_ww, self.k_ww, itf["mu_s"],
-                                      itf["mu_k"], itf["d_c"], dt, self.time_scale,
-                                      self.ww_hist[0], self.ww_hist[1], fn, ft)
+        active = 0
         if self.cut is not None:
             active += self._cut_forces(fn)
         for fs in self.facet_sets:
