@@ -15,8 +15,8 @@ targets, one ``prange`` over two lanes does better: the serial kernels run side 
 
 with one barrier at the end, after which the beams' forces are scattered to their nodes
 (the two ranges share a node).  The contact's cost grows with the number of touching
-pairs over a run, so the split that balances the lanes moves: :class:`BeamSplit` finds it
-from the measured wall time of the calls.  The lanes write disjoint memory: the beams add into the
+pairs over a run and with the bundle, so the split that balances the lanes is found
+and followed from the calls' wall time (:class:`BeamSplit`).  The lanes write disjoint memory: the beams add into the
 wire nodes' rows of the element family, the shells into the shell nodes' rows (the mesh
 keeps wire and shell nodes apart; :func:`check_disjoint`), the contact into its own
 families.  The results are those of the separate kernels, bit for bit: every kernel does
@@ -80,14 +80,17 @@ def element_and_wire_contact(
 class BeamSplit:
     """The beam split of :func:`element_and_wire_contact` that balances its lanes, found
     by hill climbing on the calls' wall time: ``window`` calls at ``centre - delta``, as
-    many at ``centre + delta``, then the centre moves by ``delta`` towards the faster
-    side.  Only the speed depends on the split, never the results."""
+    many at ``centre + delta``, then the centre moves by ``delta`` towards the side whose
+    fastest call was faster (the fastest: the work of a call is the same from call to
+    call, while the machine only ever adds delays).  The balance moves over a run (the
+    contact grows, fibres yield) and differs between bundles; the climb follows it.
+    Only the speed depends on the split, never the results."""
 
-    def __init__(self, n_el: int, window: int = 32):
-        self.n_el, self.window = int(n_el), int(window)
-        self.delta = max(1, self.n_el // 32)
-        self.centre = self.n_el // 2
-        self.sums = [0.0, 0.0]
+    def __init__(self, n_beams: int, window: int = 16):
+        self.n_beams, self.window = int(n_beams), int(window)
+        self.delta = max(1, self.n_beams // 32)
+        self.centre = self.n_beams // 2
+        self.fastest = [np.inf, np.inf]
         self.calls = 0
 
     def _side(self) -> int:
@@ -95,13 +98,14 @@ class BeamSplit:
 
     def current(self) -> int:
         """The split for the next call."""
-        return min(max(self.centre + (2 * self._side() - 1) * self.delta, 0), self.n_el)
+        return min(max(self.centre + (2 * self._side() - 1) * self.delta, 0), self.n_beams)
 
     def record(self, seconds: float) -> None:
         """The wall time of the call made at :meth:`current`."""
-        self.sums[self._side()] += seconds
+        side = self._side()
+        self.fastest[side] = min(self.fastest[side], seconds)
         self.calls += 1
         if self.calls % (2 * self.window) == 0:
-            step = self.delta if self.sums[1] < self.sums[0] else -self.delta
-            self.centre = min(max(self.centre + step, 0), self.n_el)
-            self.sums = [0.0, 0.0]
+            step = self.delta if self.fastest[1] < self.fastest[0] else -self.delta
+            self.centre = min(max(self.centre + step, 0), self.n_beams)
+            self.fastest = [np.inf, np.inf]
