@@ -840,8 +840,13 @@ def chain_cylinder_contact(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, c
     """
     n_cyl = cyl_c.shape[0]
     n_ch = chain_start.shape[0] - 1
-    part = np.zeros((n_ch, n_cyl, 3))        # force on each cylinder from each chain
-    act = np.zeros(n_ch, dtype=np.int64)
+    part = np.empty((n_ch, n_cyl, 3))        # force on each cylinder from each chain
+    act = np.empty(n_ch, dtype=np.int64)     # (filled by hand: np.zeros would be a parallel loop)
+    for w in range(n_ch):
+        act[w] = 0
+        for c in range(n_cyl):
+            for k in range(3):
+                part[w, c, k] = 0.0
     size = (n_ch + 1) // 2                   # two tasks (scratch allocated per task)
     for task in prange(2):
         nv = np.empty(3)
@@ -1245,7 +1250,9 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
                         min(n_pairs, (ch + 1) * CHUNK), pd)
     # closest facet per node (pairs are grouped by node); behind a facet only a node that was
     # in contact at the previous step (it went in from the front)
-    best = -np.ones(n_cn, dtype=np.int64)
+    best = np.empty(n_cn, dtype=np.int64)      # (np.ones / np.zeros in a parallel kernel are
+    for i in range(n_cn):                      # parallel loops of their own: filled by hand)
+        best[i] = -1
     for p in range(n_pairs):
         i = pairs[p, 0]
         if not np.isfinite(pd[p, 2]) or (pd[p, 2] < 0.0 and hist_partner[i, 0] < 0):
@@ -1256,12 +1263,12 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
     # node by node: each row of the history is read (old slot) before it is rewritten, so
     # the history is updated in place (no copies)
     maxs = hist_partner.shape[1]
-    fold = np.zeros(3)
-    dg = np.zeros(3)
-    ds = np.zeros(3)
-    hnew = np.zeros(3)
-    nv = np.zeros(3)
-    N = np.zeros(4)
+    fold = np.empty(3)
+    dg = np.empty(3)
+    ds = np.empty(3)
+    hnew = np.empty(3)
+    nv = np.empty(3)
+    N = np.empty(4)
     n_active = 0
     for i in range(n_cn):
         p = best[i]
