@@ -1,5 +1,5 @@
 """The bundle's concurrent force lanes (fe/bundle_lanes.py): the same forces and
-histories (elements, wire-wire and node-facet contact, cohesive ties) as the separate kernels, bit for bit, whatever the beam split; the split
+histories as the separate kernels, bit for bit, whatever the beam split; the split
 that balances the lanes is found from the calls' times; meshes whose beams and shells share nodes are refused."""
 import numpy as np
 import pytest
@@ -9,7 +9,7 @@ from harnesspipe.fe import contact_explicit as ce
 from harnesspipe.fe.dynamics import DynamicsSettings, integrate
 from harnesspipe.fe.shell_bt import HOURGLASS_COEF, shell_forces
 from harnesspipe.models import hifi_mesh as hm
-from harnesspipe.fe.bundle_lanes import BeamSplit, bundle_forces, check_disjoint
+from harnesspipe.fe.bundle_lanes import BeamSplit, check_disjoint, element_and_wire_contact
 from harnesspipe.models.hifi import HifiSystem
 from harnesspipe.stages.hifi import inputs
 
@@ -26,70 +26,45 @@ def pressed_bundle():
 
 
 def _state(s):
-    arrays = [*s.wires.hist, s.sstate, *s.ww_hist]
-    arrays += [h for fs in s.facet_sets for h in fs["hist"]]
-    arrays += [t[k] for t in s.ties for k in ("tie_kappa", "tie_D", "tie_energy")]
-    return arrays
-
-
-def _copy(s):
-    return [a.copy() for a in _state(s)]
+    return [a.copy() for a in (*s.wires.hist, s.sstate, *s.ww_hist)]
 
 
 def _restore(s, saved):
-    for a, b in zip(_state(s), saved):
+    for a, b in zip((*s.wires.hist, s.sstate, *s.ww_hist), saved):
         a[...] = b
 
 
 def _separate(s, v, dt):
     """The parallel kernels one after the other, as before the lanes."""
-    F = np.zeros((6,) + s.mass.shape)
+    F = np.zeros((3,) + s.mass.shape)
     s.wires.add_forces(s.x, s.quat, F[0])
     shell_forces(s.x, v, s.sconn, s.sthick, s.smat, s.sstate, dt, s.s_el, F[0], HOURGLASS_COEF, -1.0)
     itf = s.inp.interface
     n = ce.beam_beam_contact(s.x, v, s.seg, s.seg_r, s.seg_body, s.ww_pairs, s.k_ww, s.k_ww,
                              itf["mu_s"], itf["mu_k"], itf["d_c"], dt, s.time_scale,
                              s.ww_hist[0], s.ww_hist[1], F[1], F[2])
-    for fs in s.facet_sets:
-        n += ce.node_facet_contact(s.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"], fs["sign"],
-                                   fs["pairs"], fs["k"], fs["k"], *fs["mu"], dt, s.time_scale,
-                                   fs["pen_max"], fs["hist"][0], fs["hist"][1], F[1], F[2])
-    for t in s.ties:
-        if t["kind"] == "quad":
-            ce.cohesive_ties_quad(s.x, t["tie_node"], t["tie_quad"], t["tie_xi"], t["tie_sign"],
-                                  t["tie_off"], t["tie_area"], t["quads"], s.K_coh, s.delta0,
-                                  itf["delta_f"], itf["alpha_d"], t["tie_kappa"], t["tie_D"],
-                                  t["tie_energy"], F[5])
-        else:
-            ce.cohesive_ties_beam(s.x, s.quat, t["tie_node"], t["tie_seg"], t["tie_s"],
-                                  t["tie_anchor"], t["tie_arm"], t["tie_axis"], t["tie_area"],
-                                  s.seg, s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"],
-                                  t["tie_kappa"], t["tie_D"], t["tie_energy"], F[5])
     return F, n
 
 
 def _lanes(s, v, dt, split):
-    F = np.zeros((6,) + s.mass.shape)
+    F = np.zeros((3,) + s.mass.shape)
     w, itf = s.wires, s.inp.interface
-    n = bundle_forces(
+    n = element_and_wire_contact(
         w.X0, w.conn, w.R0, s.x, s.quat, w.xi_g, w.w_g, w.sec_y, w.sec_z, w.sec_area, w.sec_GJ,
         w.sec_id, w.mats, *w.hist, w.f_el, split, v, s.sconn, s.sthick, s.smat, s.sstate, dt,
         s.s_el, HOURGLASS_COEF, s.seg, s.seg_r, s.seg_body, s.ww_pairs, s.k_ww, s.k_ww,
         itf["mu_s"], itf["mu_k"], itf["d_c"], s.time_scale, s.ww_hist[0], s.ww_hist[1],
-        s.facet_list, s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"], s.quad_ties,
-        s.beam_ties, s.tie_order, F[0], F[1], F[2], F[5])
+        F[0], F[1], F[2])
     return F, n
 
 
 def test_lanes_equal_the_separate_kernels_bit_for_bit_at_any_split(pressed_bundle):
     s, v, dt = pressed_bundle
-    assert len(s.facet_sets) >= 1 and {t["kind"] for t in s.ties} == {"quad", "beam"}
-    start = _copy(s)
+    start = _state(s)
     F_ref, n_ref = _separate(s, v, dt)
-    ref = _copy(s)
+    ref = _state(s)
     assert n_ref > 50                                 # the wires touch: the contact is exercised
     assert np.abs(F_ref[2]).max() > 0.0               # with friction
-    assert np.abs(F_ref[5]).max() > 0.0               # and loaded ties
     assert any(not np.array_equal(a, b) for a, b in zip(start, ref))   # histories advanced
     n_el = s.wires.conn.shape[0]
     for split in (0, 1, n_el // 3, n_el - 1, n_el):

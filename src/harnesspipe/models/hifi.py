@@ -30,9 +30,7 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe.fe import contact_explicit as ce
-from harnesspipe.fe.bundle_lanes import (EMPTY_BEAM_TIES, EMPTY_FACET_SET, EMPTY_QUAD_TIES,
-                                         BeamSplit, beam_tie_group, bundle_forces,
-                                         check_disjoint, facet_set, quad_tie_group, typed_list)
+from harnesspipe.fe.bundle_lanes import BeamSplit, check_disjoint, element_and_wire_contact
 from harnesspipe.fe.dynamics import DynamicsSettings, integrate, prescribed_work
 from harnesspipe.fe.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
@@ -47,7 +45,7 @@ from harnesspipe.models.tube_equivalent import from_config as tube_equivalent
 FAMILIES = ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive", "damping")
 MAX_LIGHT_SCALE = 16.0   # cap of the selective shell mass scaling (the tape on its bond needs ~13)
 PIN_PATCHES = 4          # contacts of one shell part with one pin at most (connected patches: an open tube's lips)
-LANES_PHASE = "elements, bundle contact and ties"   # one phase: concurrent lanes (fe/bundle_lanes.py)
+LANES_PHASE = "elements and wire-wire contact"   # one phase: they run in concurrent lanes
 TIE_TOL = {hm.TIE_COVERING: 0.3, hm.TIE_WIRES: 0.5, hm.TIE_TAPE: 0.3}   # mm: facet chord sag / hexagonal bundle under a round band
 
 
@@ -146,9 +144,8 @@ class BundleSystem:
         self.shell_mass_scale = self._scale_to_wire_step()
         self.dt0 = 2.0 / np.sqrt(self.node_omega2().max())
         self._setup_contacts()
-        self.phase = {k: 0.0 for k in (LANES_PHASE, "contact search", "loading contact and damping")}
-        self.facet_list = self._facet_list()
-        self.quad_ties, self.beam_ties, self.tie_order = self._tie_groups()
+        self.phase = {k: 0.0 for k in (LANES_PHASE, "contact search", "other contact forces",
+                                       "cohesive")}
         self.pairs_max = 0
         self.active = 0
 
@@ -301,8 +298,6 @@ class BundleSystem:
     def _setup_ties(self):
         mesh, itf = self.mesh, self.inp.interface
         self.ties = []
-        self.K_coh = np.array([itf["K_nn"], itf["K_ss"], itf["K_tt"]], dtype=float)
-        self.delta0 = np.full(3, float(itf["delta0"]))
         if not self.has_shells or mesh.tie_nodes.size == 0:
             return
         tape = self.sconn[mesh.shell_part == hm.PART_TAPE]
@@ -335,6 +330,8 @@ class BundleSystem:
             if ties["tie_node"].size:
                 ties["kind"] = kind
                 self.ties.append(ties)
+        self.K_coh = np.array([itf["K_nn"], itf["K_ss"], itf["K_tt"]], dtype=float)
+        self.delta0 = np.full(3, float(itf["delta0"]))
         if not itf["delta_f"] > itf["delta0"]:
             raise ValueError(f"cohesive: delta_f = {itf['delta_f']} must exceed delta0 = {itf['delta0']}")
 
@@ -436,7 +433,6 @@ class BundleSystem:
         self.ww_hist = ce.fit_slot_history(self.ww_hist, np.min(p[other], axis=1))
         for fs in self.facet_sets:
             self._search_set(fs)
-        self.facet_list = self._facet_list()
 
     def _search_set(self, fs):
         lo_n, hi_n = node_aabbs(self.x, fs["nodes"], fs["r"], self.margin)
@@ -455,60 +451,66 @@ class BundleSystem:
         if self.x_search is None or max_drift2(self.x, self.x_search) > (0.5 * self.margin) ** 2:
             self._search()          # some pair may have closed in by a margin: search anew
         t1 = clock()
-        active = self._cut_forces(F[1]) if self.cut is not None else 0
-        active += self._bundle_forces(v, dt, F)
+        active = self._element_and_wire_contact_forces(v, dt, F)
         t2 = clock()
         self.beam_split.record(t2 - t1)
-        active += self._loading_forces(v, dt, F)
+        active += self._contact_forces(v, dt, F)
+        t3 = clock()
+        self._cohesive_forces(F[5])
         if self.c_damp > 0.0:
             np.multiply(self.mass, v, out=F[6])
             F[6] *= -self.c_damp
-        t3 = clock()
+        t4 = clock()
         for name, a, b in (("contact search", t0, t1), (LANES_PHASE, t1, t2),
-                           ("loading contact and damping", t2, t3)):
+                           ("other contact forces", t2, t3), ("cohesive", t3, t4)):
             self.phase[name] += b - a
         self.active = active
         self.pairs_max = max(self.pairs_max, active)
         return F
 
-    def _bundle_forces(self, v, dt, F) -> int:
-        """Beam and shell forces ON the nodes into ``F[0]``, the wire-wire and node-facet
-        contacts into ``F[1]``, ``F[2]``, the cohesive ties into ``F[5]``, in two concurrent
-        lanes (:mod:`harnesspipe.fe.bundle_lanes`); returns the number of active
-        contacts.  (The open tube's cut is added to ``F[1]`` before: on the covering's
-        nodes it comes before the node-facet contact, as it always did.)"""
+    def _element_and_wire_contact_forces(self, v, dt, F) -> int:
+        """Beam and shell forces ON the nodes into ``F[0]``, the wire-wire contact into
+        ``F[1]``, ``F[2]``, in two concurrent lanes (:mod:`harnesspipe.fe.bundle_lanes`);
+        returns the number of touching wire-wire pairs."""
         w, itf = self.wires, self.inp.interface
-        return bundle_forces(
+        return element_and_wire_contact(
             w.X0, w.conn, w.R0, self.x, self.quat, w.xi_g, w.w_g, w.sec_y, w.sec_z, w.sec_area,
             w.sec_GJ, w.sec_id, w.mats, *w.hist, w.f_el, self.beam_split.current(),
             v, self.sconn, self.sthick, self.smat, self.sstate, dt, self.s_el, HOURGLASS_COEF,
             self.seg, self.seg_r, self.seg_body, self.ww_pairs, self.k_ww, self.k_ww,
             itf["mu_s"], itf["mu_k"], itf["d_c"], self.time_scale, self.ww_hist[0],
-            self.ww_hist[1], self.facet_list, self.K_coh, self.delta0, itf["delta_f"],
-            itf["alpha_d"], self.quad_ties, self.beam_ties, self.tie_order,
-            F[0], F[1], F[2], F[5])
+            self.ww_hist[1], F[0], F[1], F[2])
 
-    def _facet_list(self):
-        """The node-facet sets as the typed list of :func:`bundle_forces` (rebuilt at each
-        search: the candidate pairs change)."""
-        sets = [facet_set(fs["nodes"], fs["r"], fs["quads"], fs["t"], fs["sign"], fs["pairs"],
-                          fs["hist"], fs["k"], fs["pen_max"], *fs["mu"])
-                for fs in self.facet_sets]
-        return typed_list(sets, EMPTY_FACET_SET)
+    def _contact_forces(self, v, dt, F) -> int:
+        """The contacts not in the lanes: the open tube's cut, the node-facet sets and the
+        loading's contacts."""
+        fn, ft = F[1], F[2]
+        active = 0
+        if self.cut is not None:
+            active += self._cut_forces(fn)
+        for fs in self.facet_sets:
+            mu_s, mu_k, d_c = fs["mu"]
+            active += ce.node_facet_contact(self.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"],
+                                            fs["sign"], fs["pairs"], fs["k"], fs["k"], mu_s, mu_k,
+                                            d_c, dt, self.time_scale, fs["pen_max"],
+                                            fs["hist"][0], fs["hist"][1], fn, ft)
+        return active + self._loading_forces(v, dt, F)
 
-    def _tie_groups(self):
-        """The cohesive tie groups as the typed lists of :func:`bundle_forces` and the
-        order in which they act (kind 0: quad, 1: beam; index)."""
-        quad, beam, order = [], [], []
+    def _cohesive_forces(self, fc):
+        itf = self.inp.interface
         for ties in self.ties:
             if ties["kind"] == "quad":
-                order.append((0, len(quad)))
-                quad.append(quad_tie_group(ties))
+                ce.cohesive_ties_quad(self.x, ties["tie_node"], ties["tie_quad"], ties["tie_xi"],
+                                      ties["tie_sign"], ties["tie_off"], ties["tie_area"],
+                                      ties["quads"], self.K_coh, self.delta0, itf["delta_f"],
+                                      itf["alpha_d"], ties["tie_kappa"], ties["tie_D"],
+                                      ties["tie_energy"], fc)
             else:
-                order.append((1, len(beam)))
-                beam.append(beam_tie_group(ties))
-        return (typed_list(quad, EMPTY_QUAD_TIES), typed_list(beam, EMPTY_BEAM_TIES),
-                np.array(order, dtype=np.int64).reshape(-1, 2))
+                ce.cohesive_ties_beam(self.x, self.quat, ties["tie_node"], ties["tie_seg"],
+                                      ties["tie_s"], ties["tie_anchor"], ties["tie_arm"],
+                                      ties["tie_axis"], ties["tie_area"], self.seg, self.K_coh,
+                                      self.delta0, itf["delta_f"], itf["alpha_d"],
+                                      ties["tie_kappa"], ties["tie_D"], ties["tie_energy"], fc)
 
     def displacement_max(self) -> float:
         return float(np.max(np.abs(self.x - self.mesh.X)))
