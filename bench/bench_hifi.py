@@ -3,9 +3,10 @@
 Measures, for the 19-wire closed-tube CWB (``cwb19_t2_closed``): the median wall time of
 repeated runs per profile (after one untimed warm-up run in the same process, so JIT
 compilation is excluded), the explicit step count and step, KE/IE and energy error, and
-the per-phase cost breakdown of the run (elements and wire-wire contact -- one phase:
-they run in concurrent lanes, fe/bundle_lanes.py --, contact search, the other
-contact forces, cohesive ties, integrator and bookkeeping) from the run's own timers; the first run in
+the per-phase cost breakdown of the run from its own timers (the elements, the bundle's
+contacts and the cohesive ties are one phase: they run in concurrent lanes,
+fe/bundle_lanes.py; the contact search; the loading's contacts and damping; the
+integrator and bookkeeping); the first run in
 fresh processes with an empty and with a filled Numba cache (JIT cost, reported apart).
 ``--convergence`` adds the mesh study (the default profile against a finer mesh) and the
 mass-scaling study (f_m = 25 against f_m = 10 at the same simulated time): the largest

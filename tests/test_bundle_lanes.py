@@ -1,15 +1,15 @@
 """The bundle's concurrent force lanes (fe/bundle_lanes.py): the same forces and
-histories as the separate kernels, bit for bit, whatever the beam split; the split
+histories (elements, wire-wire and node-facet contact, cohesive ties) as the separate kernels, bit for bit, whatever the beam split; the split
 that balances the lanes is found from the calls' times; meshes whose beams and shells share nodes are refused."""
 import numpy as np
 import pytest
 
 from harnesspipe.config import load
 from harnesspipe.fe import contact_explicit as ce
+from harnesspipe.fe.bundle_lanes import BeamSplit, check_disjoint, stack_groups
 from harnesspipe.fe.dynamics import DynamicsSettings, integrate
 from harnesspipe.fe.shell_bt import HOURGLASS_COEF, shell_forces
 from harnesspipe.models import hifi_mesh as hm
-from harnesspipe.fe.bundle_lanes import BeamSplit, check_disjoint, element_and_wire_contact
 from harnesspipe.models.hifi import HifiSystem
 from harnesspipe.stages.hifi import inputs
 
@@ -26,45 +26,68 @@ def pressed_bundle():
 
 
 def _state(s):
-    return [a.copy() for a in (*s.wires.hist, s.sstate, *s.ww_hist)]
+    arrays = [*s.wires.hist, s.sstate, *s.ww_hist]
+    arrays += [h for fs in s.facet_sets for h in fs["hist"]]
+    arrays += [t[k] for t in s.ties for k in ("tie_kappa", "tie_D", "tie_energy")]
+    return arrays
+
+
+def _copy(s):
+    return [a.copy() for a in _state(s)]
 
 
 def _restore(s, saved):
-    for a, b in zip((*s.wires.hist, s.sstate, *s.ww_hist), saved):
+    for a, b in zip(_state(s), saved):
         a[...] = b
 
 
 def _separate(s, v, dt):
     """The parallel kernels one after the other, as before the lanes."""
-    F = np.zeros((3,) + s.mass.shape)
+    F = np.zeros((6,) + s.mass.shape)
     s.wires.add_forces(s.x, s.quat, F[0])
     shell_forces(s.x, v, s.sconn, s.sthick, s.smat, s.sstate, dt, s.s_el, F[0], HOURGLASS_COEF, -1.0)
     itf = s.inp.interface
     n = ce.beam_beam_contact(s.x, v, s.seg, s.seg_r, s.seg_body, s.ww_pairs, s.k_ww, s.k_ww,
                              itf["mu_s"], itf["mu_k"], itf["d_c"], dt, s.time_scale,
                              s.ww_hist[0], s.ww_hist[1], F[1], F[2])
+    for fs in s.facet_sets:
+        n += ce.node_facet_contact(s.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"], fs["sign"],
+                                   fs["pairs"], fs["k"], fs["k"], *fs["mu"], dt, s.time_scale,
+                                   fs["pen_max"], fs["hist"][0], fs["hist"][1], F[1], F[2])
+    for t in s.ties:
+        if t["kind"] == "quad":
+            ce.cohesive_ties_quad(s.x, t["tie_node"], t["tie_quad"], t["tie_xi"], t["tie_sign"],
+                                  t["tie_off"], t["tie_area"], t["quads"], s.K_coh, s.delta0,
+                                  itf["delta_f"], itf["alpha_d"], t["tie_kappa"], t["tie_D"],
+                                  t["tie_energy"], F[5])
+        else:
+            ce.cohesive_ties_beam(s.x, s.quat, t["tie_node"], t["tie_seg"], t["tie_s"],
+                                  t["tie_anchor"], t["tie_arm"], t["tie_axis"], t["tie_area"],
+                                  s.seg, s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"],
+                                  t["tie_kappa"], t["tie_D"], t["tie_energy"], F[5])
     return F, n
 
 
 def _lanes(s, v, dt, split):
-    F = np.zeros((3,) + s.mass.shape)
-    w, itf = s.wires, s.inp.interface
-    n = element_and_wire_contact(
-        w.X0, w.conn, w.R0, s.x, s.quat, w.xi_g, w.w_g, w.sec_y, w.sec_z, w.sec_area, w.sec_GJ,
-        w.sec_id, w.mats, *w.hist, w.f_el, split, v, s.sconn, s.sthick, s.smat, s.sstate, dt,
-        s.s_el, HOURGLASS_COEF, s.seg, s.seg_r, s.seg_body, s.ww_pairs, s.k_ww, s.k_ww,
-        itf["mu_s"], itf["mu_k"], itf["d_c"], s.time_scale, s.ww_hist[0], s.ww_hist[1],
-        F[0], F[1], F[2])
+    """The system's lanes call at a given beam split."""
+    F = np.zeros((6,) + s.mass.shape)
+    s.beam_split.current = lambda: split
+    try:
+        n = s._bundle_forces(v, dt, F)
+    finally:
+        del s.beam_split.current
     return F, n
 
 
 def test_lanes_equal_the_separate_kernels_bit_for_bit_at_any_split(pressed_bundle):
     s, v, dt = pressed_bundle
-    start = _state(s)
+    assert len(s.facet_sets) >= 1 and {t["kind"] for t in s.ties} == {"quad", "beam"}
+    start = _copy(s)
     F_ref, n_ref = _separate(s, v, dt)
-    ref = _state(s)
+    ref = _copy(s)
     assert n_ref > 50                                 # the wires touch: the contact is exercised
     assert np.abs(F_ref[2]).max() > 0.0               # with friction
+    assert np.abs(F_ref[5]).max() > 0.0               # and loaded ties
     assert any(not np.array_equal(a, b) for a, b in zip(start, ref))   # histories advanced
     n_el = s.wires.conn.shape[0]
     for split in (0, 1, n_el // 3, n_el - 1, n_el):
@@ -99,3 +122,19 @@ def test_beams_and_shells_sharing_a_node_are_refused():
     check_disjoint(beams, np.array([[3, 4, 5, 6]]))
     with pytest.raises(ValueError, match="shared by beams and shells"):
         check_disjoint(beams, np.array([[2, 4, 5, 6]]))
+
+
+def test_stacked_groups_share_their_histories_with_the_groups():
+    """Stacking keeps each group's rows in order with its offsets; a shared (history)
+    array is the same memory in the group and in the stack; no groups: empty arrays of
+    the declared shape."""
+    spec = {"ids": ((), np.int64), "xi": ((2,), float), "D": ((), float)}
+    groups = [dict(ids=np.array([3, 4]), xi=np.ones((2, 2)), D=np.zeros(2)),
+              dict(ids=np.array([7]), xi=2 * np.ones((1, 2)), D=np.zeros(1))]
+    (ids, xi, D), (off, _, _) = stack_groups(groups, spec, shared=("D",))
+    assert ids.tolist() == [3, 4, 7] and off.tolist() == [0, 2, 3]
+    assert xi[2].tolist() == [2.0, 2.0]
+    D[2] = 0.5                                       # the kernel damages tie 0 of group 1
+    assert groups[1]["D"][0] == 0.5 and groups[0]["D"].tolist() == [0.0, 0.0]
+    (ids, xi, D), (off, _, _) = stack_groups([], spec)
+    assert ids.shape == (0,) and xi.shape == (0, 2) and off.tolist() == [0]

@@ -1,26 +1,30 @@
-"""The bundle's heaviest force families in two concurrent lanes.
+"""The bundle's force families in two concurrent lanes.
 
-Per explicit step the wires' beam forces, the coverings' shell forces and the wire-wire
-contact cost about three quarters of the force evaluation (bench/RESULTS.md, "Hi-fi
-explicit step cost").  Each kernel could run in parallel on its own (a ``prange`` over
-chunks), but then both threads meet at a barrier after every kernel and wait through
-every kernel's serial part (scatters, history commits).  On the 2 cores this project
-targets, one ``prange`` over two lanes does better: the serial kernels run side by side,
+Each force kernel could run in parallel on its own (a ``prange`` over chunks), but then
+both threads meet at a barrier after every kernel, wait through every kernel's serial
+part (scatters, history commits) and pay a thread launch per kernel -- about ten a step.
+On the 2 cores this project targets, one ``prange`` over two lanes does better: the
+serial kernels run side by side,
 
 * lane 0: the wire-wire contact
-  (:func:`harnesspipe.fe.contact_explicit.beam_beam_contact_serial`) and the beams
-  ``0 .. split - 1`` (:func:`harnesspipe.fe.beam_explicit.beam_range_forces`);
-* lane 1: the shells (:func:`harnesspipe.fe.shell_bt.shell_element_forces_serial`) and
-  the beams ``split .. n - 1``,
+  (:func:`harnesspipe.fe.contact_explicit.beam_beam_contact_serial`), the node-facet
+  contact sets (:func:`~harnesspipe.fe.contact_explicit.node_facet_contact_serial`) and
+  the beams ``0 .. split - 1`` (:func:`harnesspipe.fe.beam_explicit.beam_range_forces`);
+* lane 1: the shells (:func:`harnesspipe.fe.shell_bt.shell_element_forces_serial`), the
+  cohesive ties (:func:`~harnesspipe.fe.contact_explicit.cohesive_ties_quad_serial`,
+  :func:`~harnesspipe.fe.contact_explicit.cohesive_ties_beam`) and the beams
+  ``split .. n - 1``,
 
 with one barrier at the end, after which the beams' forces are scattered to their nodes
 (the two ranges share a node).  The contact's cost grows with the number of touching
-pairs over a run and with the bundle, so the split that balances the lanes is found
-and followed from the calls' wall time (:class:`BeamSplit`).  The lanes write disjoint memory: the beams add into the
-wire nodes' rows of the element family, the shells into the shell nodes' rows (the mesh
-keeps wire and shell nodes apart; :func:`check_disjoint`), the contact into its own
-families.  The results are those of the separate kernels, bit for bit: every kernel does
-the same arithmetic in the same order, whatever the split.
+pairs over a run and differs between bundles, so the split that balances the lanes is
+found and followed from the calls' wall time (:class:`BeamSplit`).  The lanes write
+disjoint memory: the beams add into the wire nodes' rows of the element family, the
+shells into the shell nodes' rows (the mesh keeps wire and shell nodes apart;
+:func:`check_disjoint`), the contacts (lane 0) and the ties (lane 1) into their own
+families.  The results are those of the separate kernels called one after the other, bit
+for bit: every kernel does the same arithmetic in the same order, whatever the split.
+The loading's contacts (pins, clamps) stay with the system that owns them.
 """
 from __future__ import annotations
 
@@ -28,7 +32,8 @@ import numpy as np
 from numba import njit, prange
 
 from harnesspipe.fe.beam_explicit import beam_range_forces, beam_scatter
-from harnesspipe.fe.contact_explicit import beam_beam_contact_serial
+from harnesspipe.fe.contact_explicit import (beam_beam_contact_serial, cohesive_ties_beam,
+                                             cohesive_ties_quad_serial, node_facet_contact_serial)
 from harnesspipe.fe.shell_bt import scatter_add, shell_element_forces_serial
 
 
@@ -42,43 +47,126 @@ def check_disjoint(beam_conn, shell_conn) -> None:
 
 
 @njit(cache=True, parallel=True)
-def element_and_wire_contact(
+def bundle_forces(
         X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area, sec_GJ, sec_id, mats,
         eps_p, alpha, sa_h, b_el, beam_split,                       # beams
         v, sconn, sthick, smat, sstate, dt, s_el, hg,               # shells
         seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d_c, time_scale, hist_partner,
         hist_ft,                                                    # wire-wire contact
-        f_el, f_n, f_t):
-    """Element forces ON the nodes added into ``f_el`` and the wire-wire contact's normal
-    and friction forces into ``f_n``, ``f_t``, in the two lanes of the module docstring;
-    histories advance in place as in the separate kernels.  Arguments as
-    :func:`~harnesspipe.fe.beam_explicit.beam_forces` (``b_el`` its scratch; the beams'
-    material ids are their section ids; ``beam_split`` the first beam of lane 1),
-    :func:`~harnesspipe.fe.shell_bt.shell_forces` (``s_el`` its scratch, ``hg`` the
+        fs_nodes, fs_r, fs_quads, fs_t, fs_sign, fs_pairs, fs_hist_p, fs_hist_ft, fs_off,
+        fs_prm,                                                     # node-facet sets
+        qt_node, qt_quad, qt_xi, qt_sign, qt_offset, qt_area, qt_quads, qt_kappa, qt_D,
+        qt_energy, qt_off,                                          # ties to quads
+        bt_node, bt_seg, bt_s, bt_anchor, bt_arm, bt_axis, bt_area, bt_kappa, bt_D,
+        bt_energy, bt_off,                                          # ties to beams
+        K, delta0, delta_f, alpha_d, tie_order,                     # cohesive law
+        f_el, f_n, f_t, f_c):
+    """Element forces ON the nodes added into ``f_el``, the contacts' normal and friction
+    forces into ``f_n``, ``f_t`` and the cohesive ties' into ``f_c``, in the two lanes of
+    the module docstring; histories advance in place as in the separate kernels.
+
+    Arguments as :func:`~harnesspipe.fe.beam_explicit.beam_forces` (``b_el`` its scratch;
+    the beams' material ids are their section ids; ``beam_split`` the first beam of lane
+    1), :func:`~harnesspipe.fe.shell_bt.shell_forces` (``s_el`` its scratch, ``hg`` the
     hourglass coefficient) and :func:`~harnesspipe.fe.contact_explicit.beam_beam_contact`.
-    Returns the number of touching wire-wire pairs."""
+    The node-facet sets (``fs_*``), the tie groups to quads (``qt_*``) and to beams
+    (``bt_*``) come as their arrays one after the other (:func:`stack_groups`), group
+    ``g`` at rows ``off[g] .. off[g + 1] - 1`` (``fs_off`` (n + 1, 3): nodes, quads,
+    pairs; ``qt_off`` (n + 1, 2): ties, quads; ``bt_off`` (n + 1,)); ``fs_prm`` (n, 5)
+    the sets' (k, pen_max, mu_s, mu_k, d_c); the groups' pair and tie indices are their
+    own.  The ties act in the order of ``tie_order`` rows (kind 0: quad, 1: beam; group),
+    with the cohesive law's ``K, delta0, delta_f, alpha_d`` (eqs. 7-10).  Returns the
+    number of active contacts (wire-wire pairs and node-facet contacts)."""
     n_el = conn.shape[0]
     split = min(max(beam_split, 0), n_el)
     n_act = np.empty(1, dtype=np.int64)
     for lane in prange(2):
         if lane == 0:
-            n_act[0] = beam_beam_contact_serial(x, v, seg, seg_r, seg_body, pairs, k_n,
-                                                k_t, mu_s, mu_k, d_c, dt, time_scale,
-                                                hist_partner, hist_ft, f_n, f_t)
+            n = beam_beam_contact_serial(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s,
+                                         mu_k, d_c, dt, time_scale, hist_partner, hist_ft,
+                                         f_n, f_t)
+            n += _facet_sets(x, v, fs_nodes, fs_r, fs_quads, fs_t, fs_sign, fs_pairs,
+                             fs_hist_p, fs_hist_ft, fs_off, fs_prm, dt, time_scale, f_n, f_t)
+            n_act[0] = n
             beam_range_forces(0, split, X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z,
                               sec_area, sec_GJ, sec_id, mats, sec_id, eps_p, alpha, sa_h, b_el)
         else:
             shell_element_forces_serial(x, v, sconn, sthick, smat, sstate, dt, s_el, hg)
             scatter_add(sconn, s_el, f_el, -1.0)
+            _ties(x, quat, seg, qt_node, qt_quad, qt_xi, qt_sign, qt_offset, qt_area, qt_quads,
+                  qt_kappa, qt_D, qt_energy, qt_off, bt_node, bt_seg, bt_s, bt_anchor, bt_arm,
+                  bt_axis, bt_area, bt_kappa, bt_D, bt_energy, bt_off, K, delta0, delta_f,
+                  alpha_d, tie_order, f_c)
             beam_range_forces(split, n_el, X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z,
                               sec_area, sec_GJ, sec_id, mats, sec_id, eps_p, alpha, sa_h, b_el)
     beam_scatter(conn, b_el, f_el, -1.0)
     return n_act[0]
 
 
+@njit(cache=True)
+def _facet_sets(x, v, nodes, r, quads, t, sign, pairs, hist_p, hist_ft, off, prm, dt,
+                time_scale, f_n, f_t):
+    """The node-facet sets of :func:`bundle_forces` one after the other; returns the
+    number of active contacts."""
+    n = 0
+    for g in range(prm.shape[0]):
+        n0, n1 = off[g, 0], off[g + 1, 0]
+        q0, q1 = off[g, 1], off[g + 1, 1]
+        p0, p1 = off[g, 2], off[g + 1, 2]
+        n += node_facet_contact_serial(x, v, nodes[n0:n1], r[n0:n1], quads[q0:q1], t[q0:q1],
+                                       sign[q0:q1], pairs[p0:p1], prm[g, 0], prm[g, 0],
+                                       prm[g, 2], prm[g, 3], prm[g, 4], dt, time_scale,
+                                       prm[g, 1], hist_p[n0:n1], hist_ft[n0:n1], f_n, f_t)
+    return n
+
+
+@njit(cache=True)
+def _ties(x, quat, seg, qt_node, qt_quad, qt_xi, qt_sign, qt_offset, qt_area, qt_quads,
+          qt_kappa, qt_D, qt_energy, qt_off, bt_node, bt_seg, bt_s, bt_anchor, bt_arm,
+          bt_axis, bt_area, bt_kappa, bt_D, bt_energy, bt_off, K, delta0, delta_f, alpha_d,
+          tie_order, f_c):
+    """The tie groups of :func:`bundle_forces` in the order of ``tie_order``."""
+    for r in range(tie_order.shape[0]):
+        g = tie_order[r, 1]
+        if tie_order[r, 0] == 0:
+            a, b = qt_off[g, 0], qt_off[g + 1, 0]
+            q0, q1 = qt_off[g, 1], qt_off[g + 1, 1]
+            cohesive_ties_quad_serial(x, qt_node[a:b], qt_quad[a:b], qt_xi[a:b], qt_sign[a:b],
+                                      qt_offset[a:b], qt_area[a:b], qt_quads[q0:q1], K, delta0,
+                                      delta_f, alpha_d, qt_kappa[a:b], qt_D[a:b],
+                                      qt_energy[a:b], f_c)
+        else:
+            a, b = bt_off[g], bt_off[g + 1]
+            cohesive_ties_beam(x, quat, bt_node[a:b], bt_seg[a:b], bt_s[a:b], bt_anchor[a:b],
+                               bt_arm[a:b], bt_axis[a:b], bt_area[a:b], seg, K, delta0,
+                               delta_f, alpha_d, bt_kappa[a:b], bt_D[a:b], bt_energy[a:b],
+                               f_c)
+
+
+def stack_groups(groups: list, spec: dict, shared: tuple = ()):
+    """The groups' arrays one after the other (axis 0), for :func:`bundle_forces`.
+    ``spec``: key -> (trailing shape, dtype) of each array to stack; returns the stacked
+    arrays (in ``spec`` order, C-contiguous, of that dtype) and each key's offsets
+    (n_groups + 1,).  The arrays under ``shared`` -- histories the kernels update in place
+    -- are replaced in every group by its view of the stacked array, so that the group
+    sees the updates."""
+    stacked, offsets = [], []
+    for key, (tail, dtype) in spec.items():
+        parts = [np.asarray(g[key]).reshape(-1, *tail) for g in groups]
+        arr = (np.ascontiguousarray(np.concatenate(parts, axis=0), dtype=dtype) if parts
+               else np.zeros((0, *tail), dtype=dtype))
+        off = np.zeros(len(parts) + 1, dtype=np.int64)
+        off[1:] = np.cumsum([q.shape[0] for q in parts])
+        if key in shared:
+            for g, lo, hi in zip(groups, off[:-1], off[1:]):
+                g[key] = arr[lo:hi]
+        stacked.append(arr)
+        offsets.append(off)
+    return stacked, offsets
+
 
 class BeamSplit:
-    """The beam split of :func:`element_and_wire_contact` that balances its lanes, found
+    """The beam split of :func:`bundle_forces` that balances its lanes, found
     by hill climbing on the calls' wall time: ``window`` calls at ``centre - delta``, as
     many at ``centre + delta``, then the centre moves by ``delta`` towards the side whose
     fastest call was faster (the fastest: the work of a call is the same from call to

@@ -1235,7 +1235,6 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
     Returns the number of active contacts.
     """
     n_pairs = pairs.shape[0]
-    n_cn = nodes.shape[0]
     dt_phys = dt * time_scale
     t_max = 0.0
     for q in range(quad_t.shape[0]):
@@ -1248,11 +1247,36 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
         for ch in prange(n_chunks):
             _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, ch * CHUNK,
                         min(n_pairs, (ch + 1) * CHUNK), pd)
+    return _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu_k, d_c,
+                      dt, dt_phys, pen_max, hist_partner, hist_ft, f_n, f_t)
+
+
+@njit(cache=True)
+def node_facet_contact_serial(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n, k_t,
+                              mu_s, mu_k, d_c, dt, time_scale, pen_max, hist_partner, hist_ft,
+                              f_n, f_t):
+    """Serial twin of :func:`node_facet_contact` (for a caller that runs it beside other
+    work); the same steps, the same arithmetic, the same results."""
+    n_pairs = pairs.shape[0]
+    t_max = 0.0
+    for q in range(quad_t.shape[0]):
+        t_max = max(t_max, quad_t[q])
+    pd = np.empty((n_pairs, 9))
+    _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, 0, n_pairs, pd)
+    return _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu_k, d_c,
+                      dt, dt * time_scale, pen_max, hist_partner, hist_ft, f_n, f_t)
+
+
+@njit(cache=True)
+def _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu_k, d_c, dt,
+               dt_phys, pen_max, hist_partner, hist_ft, f_n, f_t):
+    """The serial end of the node-facet contact, from the projections ``pd`` of the pairs
+    (:func:`_nf_project`): each node's closest facet, its force, friction and history."""
+    n_pairs = pairs.shape[0]
+    n_cn = nodes.shape[0]
     # closest facet per node (pairs are grouped by node); behind a facet only a node that was
     # in contact at the previous step (it went in from the front)
-    best = np.empty(n_cn, dtype=np.int64)      # (np.ones / np.zeros in a parallel kernel are
-    for i in range(n_cn):                      # parallel loops of their own: filled by hand)
-        best[i] = -1
+    best = np.full(n_cn, -1, dtype=np.int64)
     for p in range(n_pairs):
         i = pairs[p, 0]
         if not np.isfinite(pd[p, 2]) or (pd[p, 2] < 0.0 and hist_partner[i, 0] < 0):
@@ -1466,37 +1490,68 @@ def cohesive_ties_quad(x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_are
     lever = np.empty((n, 3))
     n_chunks = (n + CHUNK - 1) // CHUNK
     for ch in prange(n_chunks):
-        scr = np.zeros((5, 3))      # per-task scratch
-        for j in range(ch * CHUNK, min(n, (ch + 1) * CHUNK)):
-            q = tie_quad[j]
-            delta = scr[0]
-            tloc = scr[1]
-            X = scr[2]
-            nq = scr[3]
-            e1 = scr[4]
-            _quad_eval(x, quads, q, tie_xi[j, 0], tie_xi[j, 1], X, nq, e1)
-            sg = tie_sign[j]
-            d0 = x[tie_node[j], 0] - X[0]
-            d1 = x[tie_node[j], 1] - X[1]
-            d2 = x[tie_node[j], 2] - X[2]
-            lever[j, 0] = d0
-            lever[j, 1] = d1
-            lever[j, 2] = d2
-            n0 = sg * nq[0]
-            n1 = sg * nq[1]
-            n2 = sg * nq[2]
-            t0 = n1 * e1[2] - n2 * e1[1]
-            t1 = n2 * e1[0] - n0 * e1[2]
-            t2 = n0 * e1[1] - n1 * e1[0]
-            delta[0] = d0 * n0 + d1 * n1 + d2 * n2 - tie_off[j, 0]
-            delta[1] = d0 * e1[0] + d1 * e1[1] + d2 * e1[2] - tie_off[j, 1]
-            delta[2] = d0 * t0 + d1 * t1 + d2 * t2 - tie_off[j, 2]
-            _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
-                          tie_area, tloc)
-            A = tie_area[j]
-            pf[j, 0] = -A * (tloc[0] * n0 + tloc[1] * e1[0] + tloc[2] * t0)
-            pf[j, 1] = -A * (tloc[0] * n1 + tloc[1] * e1[1] + tloc[2] * t1)
-            pf[j, 2] = -A * (tloc[0] * n2 + tloc[1] * e1[2] + tloc[2] * t2)
+        _quad_ties_range(ch * CHUNK, min(n, (ch + 1) * CHUNK), x, tie_node, tie_quad, tie_xi,
+                         tie_sign, tie_off, tie_area, quads, K, delta0, delta_mf, alpha,
+                         tie_kappa, tie_D, tie_energy, pf, lever)
+    return _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, lever, f_c)
+
+
+@njit(cache=True)
+def cohesive_ties_quad_serial(x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, quads,
+                              K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, f_c):
+    """Serial twin of :func:`cohesive_ties_quad` (for a caller that runs it beside other
+    work); the same arithmetic, the same results."""
+    n = tie_node.shape[0]
+    pf = np.empty((n, 3))
+    lever = np.empty((n, 3))
+    _quad_ties_range(0, n, x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, quads, K,
+                     delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, pf, lever)
+    return _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, lever, f_c)
+
+
+@njit(cache=True)
+def _quad_ties_range(lo, hi, x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, quads,
+                     K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, pf, lever):
+    """Ties ``lo..hi-1``: separation, eqs. 7-10 (damage in place) and the traction's force
+    on the tied node into ``pf``, its lever about the target point into ``lever``."""
+    scr = np.empty((5, 3))
+    for j in range(lo, hi):
+        q = tie_quad[j]
+        delta = scr[0]
+        tloc = scr[1]
+        X = scr[2]
+        nq = scr[3]
+        e1 = scr[4]
+        _quad_eval(x, quads, q, tie_xi[j, 0], tie_xi[j, 1], X, nq, e1)
+        sg = tie_sign[j]
+        d0 = x[tie_node[j], 0] - X[0]
+        d1 = x[tie_node[j], 1] - X[1]
+        d2 = x[tie_node[j], 2] - X[2]
+        lever[j, 0] = d0
+        lever[j, 1] = d1
+        lever[j, 2] = d2
+        n0 = sg * nq[0]
+        n1 = sg * nq[1]
+        n2 = sg * nq[2]
+        t0 = n1 * e1[2] - n2 * e1[1]
+        t1 = n2 * e1[0] - n0 * e1[2]
+        t2 = n0 * e1[1] - n1 * e1[0]
+        delta[0] = d0 * n0 + d1 * n1 + d2 * n2 - tie_off[j, 0]
+        delta[1] = d0 * e1[0] + d1 * e1[1] + d2 * e1[2] - tie_off[j, 1]
+        delta[2] = d0 * t0 + d1 * t1 + d2 * t2 - tie_off[j, 2]
+        _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
+                      tie_area, tloc)
+        A = tie_area[j]
+        pf[j, 0] = -A * (tloc[0] * n0 + tloc[1] * e1[0] + tloc[2] * t0)
+        pf[j, 1] = -A * (tloc[0] * n1 + tloc[1] * e1[1] + tloc[2] * t1)
+        pf[j, 2] = -A * (tloc[0] * n2 + tloc[1] * e1[2] + tloc[2] * t2)
+
+
+@njit(cache=True)
+def _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, lever, f_c):
+    """The serial end of the quad ties: forces to the tied nodes and the targets' nodes
+    (in tie order); returns the number of failed ties."""
+    n = tie_node.shape[0]
     n_failed = 0
     for j in range(n):
         if tie_D[j] >= 1.0:

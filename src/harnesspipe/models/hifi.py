@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe.fe import contact_explicit as ce
-from harnesspipe.fe.bundle_lanes import BeamSplit, check_disjoint, element_and_wire_contact
+from harnesspipe.fe.bundle_lanes import BeamSplit, bundle_forces, check_disjoint, stack_groups
 from harnesspipe.fe.dynamics import DynamicsSettings, integrate, prescribed_work
 from harnesspipe.fe.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
@@ -45,8 +45,21 @@ from harnesspipe.models.tube_equivalent import from_config as tube_equivalent
 FAMILIES = ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive", "damping")
 MAX_LIGHT_SCALE = 16.0   # cap of the selective shell mass scaling (the tape on its bond needs ~13)
 PIN_PATCHES = 4          # contacts of one shell part with one pin at most (connected patches: an open tube's lips)
-LANES_PHASE = "elements and wire-wire contact"   # one phase: they run in concurrent lanes
+LANES_PHASE = "elements, bundle contact and ties"   # one phase: concurrent lanes (fe/bundle_lanes.py)
 TIE_TOL = {hm.TIE_COVERING: 0.3, hm.TIE_WIRES: 0.5, hm.TIE_TAPE: 0.3}   # mm: facet chord sag / hexagonal bundle under a round band
+I8, F8 = np.int64, float
+FACET_SPEC = {"nodes": ((), I8), "r": ((), F8), "quads": ((4,), I8), "t": ((), F8),
+              "sign": ((), F8), "hist_p": ((ce.DEFAULT_MAXS,), I8),
+              "hist_ft": ((ce.DEFAULT_MAXS, 3), F8)}          # stacked node-facet sets
+QUAD_TIE_SPEC = {"tie_node": ((), I8), "tie_quad": ((), I8), "tie_xi": ((2,), F8),
+                 "tie_sign": ((), F8), "tie_off": ((3,), F8), "tie_area": ((), F8),
+                 "quads": ((4,), I8), "tie_kappa": ((), F8), "tie_D": ((), F8),
+                 "tie_energy": ((), F8)}                       # stacked ties to quads
+BEAM_TIE_SPEC = {"tie_node": ((), I8), "tie_seg": ((), I8), "tie_s": ((), F8),
+                 "tie_anchor": ((), I8), "tie_arm": ((3,), F8), "tie_axis": ((3,), F8),
+                 "tie_area": ((), F8), "tie_kappa": ((), F8), "tie_D": ((), F8),
+                 "tie_energy": ((), F8)}                       # stacked ties to beams
+TIE_HISTORY = ("tie_kappa", "tie_D", "tie_energy")
 
 
 @dataclass
@@ -144,8 +157,9 @@ class BundleSystem:
         self.shell_mass_scale = self._scale_to_wire_step()
         self.dt0 = 2.0 / np.sqrt(self.node_omega2().max())
         self._setup_contacts()
-        self.phase = {k: 0.0 for k in (LANES_PHASE, "contact search", "other contact forces",
-                                       "cohesive")}
+        self.phase = {k: 0.0 for k in (LANES_PHASE, "contact search", "loading contact and damping")}
+        self._stack_facet_sets()
+        self._stack_ties()
         self.pairs_max = 0
         self.active = 0
 
@@ -298,6 +312,8 @@ class BundleSystem:
     def _setup_ties(self):
         mesh, itf = self.mesh, self.inp.interface
         self.ties = []
+        self.K_coh = np.array([itf["K_nn"], itf["K_ss"], itf["K_tt"]], dtype=float)
+        self.delta0 = np.full(3, float(itf["delta0"]))
         if not self.has_shells or mesh.tie_nodes.size == 0:
             return
         tape = self.sconn[mesh.shell_part == hm.PART_TAPE]
@@ -330,8 +346,6 @@ class BundleSystem:
             if ties["tie_node"].size:
                 ties["kind"] = kind
                 self.ties.append(ties)
-        self.K_coh = np.array([itf["K_nn"], itf["K_ss"], itf["K_tt"]], dtype=float)
-        self.delta0 = np.full(3, float(itf["delta0"]))
         if not itf["delta_f"] > itf["delta0"]:
             raise ValueError(f"cohesive: delta_f = {itf['delta_f']} must exceed delta0 = {itf['delta0']}")
 
@@ -433,6 +447,7 @@ class BundleSystem:
         self.ww_hist = ce.fit_slot_history(self.ww_hist, np.min(p[other], axis=1))
         for fs in self.facet_sets:
             self._search_set(fs)
+        self._stack_facet_pairs()
 
     def _search_set(self, fs):
         lo_n, hi_n = node_aabbs(self.x, fs["nodes"], fs["r"], self.margin)
@@ -451,66 +466,74 @@ class BundleSystem:
         if self.x_search is None or max_drift2(self.x, self.x_search) > (0.5 * self.margin) ** 2:
             self._search()          # some pair may have closed in by a margin: search anew
         t1 = clock()
-        active = self._element_and_wire_contact_forces(v, dt, F)
+        active = self._cut_forces(F[1]) if self.cut is not None else 0
+        active += self._bundle_forces(v, dt, F)
         t2 = clock()
         self.beam_split.record(t2 - t1)
-        active += self._contact_forces(v, dt, F)
-        t3 = clock()
-        self._cohesive_forces(F[5])
+        active += self._loading_forces(v, dt, F)
         if self.c_damp > 0.0:
             np.multiply(self.mass, v, out=F[6])
             F[6] *= -self.c_damp
-        t4 = clock()
+        t3 = clock()
         for name, a, b in (("contact search", t0, t1), (LANES_PHASE, t1, t2),
-                           ("other contact forces", t2, t3), ("cohesive", t3, t4)):
+                           ("loading contact and damping", t2, t3)):
             self.phase[name] += b - a
         self.active = active
         self.pairs_max = max(self.pairs_max, active)
         return F
 
-    def _element_and_wire_contact_forces(self, v, dt, F) -> int:
-        """Beam and shell forces ON the nodes into ``F[0]``, the wire-wire contact into
-        ``F[1]``, ``F[2]``, in two concurrent lanes (:mod:`harnesspipe.fe.bundle_lanes`);
-        returns the number of touching wire-wire pairs."""
+    def _bundle_forces(self, v, dt, F) -> int:
+        """Beam and shell forces ON the nodes into ``F[0]``, the wire-wire and node-facet
+        contacts into ``F[1]``, ``F[2]``, the cohesive ties into ``F[5]``, in two concurrent
+        lanes (:mod:`harnesspipe.fe.bundle_lanes`); returns the number of active
+        contacts.  (The open tube's cut is added to ``F[1]`` before: on the covering's
+        nodes it comes before the node-facet contact, as it always did.)"""
         w, itf = self.wires, self.inp.interface
-        return element_and_wire_contact(
+        return bundle_forces(
             w.X0, w.conn, w.R0, self.x, self.quat, w.xi_g, w.w_g, w.sec_y, w.sec_z, w.sec_area,
             w.sec_GJ, w.sec_id, w.mats, *w.hist, w.f_el, self.beam_split.current(),
             v, self.sconn, self.sthick, self.smat, self.sstate, dt, self.s_el, HOURGLASS_COEF,
             self.seg, self.seg_r, self.seg_body, self.ww_pairs, self.k_ww, self.k_ww,
             itf["mu_s"], itf["mu_k"], itf["d_c"], self.time_scale, self.ww_hist[0],
-            self.ww_hist[1], F[0], F[1], F[2])
+            self.ww_hist[1], *self.facet_arrays, self.facet_pairs, self.facet_hist_p,
+            self.facet_hist_ft, self.facet_off, self.facet_prm, *self.quad_ties,
+            *self.beam_ties, self.K_coh, self.delta0, itf["delta_f"], itf["alpha_d"],
+            self.tie_order, F[0], F[1], F[2], F[5])
 
-    def _contact_forces(self, v, dt, F) -> int:
-        """The contacts not in the lanes: the open tube's cut, the node-facet sets and the
-        loading's contacts."""
-        fn, ft = F[1], F[2]
-        active = 0
-        if self.cut is not None:
-            active += self._cut_forces(fn)
-        for fs in self.facet_sets:
-            mu_s, mu_k, d_c = fs["mu"]
-            active += ce.node_facet_contact(self.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"],
-                                            fs["sign"], fs["pairs"], fs["k"], fs["k"], mu_s, mu_k,
-                                            d_c, dt, self.time_scale, fs["pen_max"],
-                                            fs["hist"][0], fs["hist"][1], fn, ft)
-        return active + self._loading_forces(v, dt, F)
+    def _stack_facet_sets(self):
+        """The node-facet sets stacked for :func:`bundle_forces` (their histories become
+        views of the stacked ones); the pairs are stacked at each search
+        (:meth:`_stack_facet_pairs`)."""
+        sets = self.facet_sets
+        for fs in sets:
+            fs["hist_p"], fs["hist_ft"] = fs["hist"]
+        arrays, off = stack_groups(sets, FACET_SPEC, shared=("hist_p", "hist_ft"))
+        for fs in sets:
+            fs["hist"] = (fs["hist_p"], fs["hist_ft"])
+        *self.facet_arrays, self.facet_hist_p, self.facet_hist_ft = arrays
+        self.facet_node_off, self.facet_quad_off = off[0], off[2]
+        self.facet_prm = np.array([[fs["k"], fs["pen_max"], *fs["mu"]] for fs in sets],
+                                  dtype=float).reshape(-1, 5)
+        self._stack_facet_pairs()
 
-    def _cohesive_forces(self, fc):
-        itf = self.inp.interface
-        for ties in self.ties:
-            if ties["kind"] == "quad":
-                ce.cohesive_ties_quad(self.x, ties["tie_node"], ties["tie_quad"], ties["tie_xi"],
-                                      ties["tie_sign"], ties["tie_off"], ties["tie_area"],
-                                      ties["quads"], self.K_coh, self.delta0, itf["delta_f"],
-                                      itf["alpha_d"], ties["tie_kappa"], ties["tie_D"],
-                                      ties["tie_energy"], fc)
-            else:
-                ce.cohesive_ties_beam(self.x, self.quat, ties["tie_node"], ties["tie_seg"],
-                                      ties["tie_s"], ties["tie_anchor"], ties["tie_arm"],
-                                      ties["tie_axis"], ties["tie_area"], self.seg, self.K_coh,
-                                      self.delta0, itf["delta_f"], itf["alpha_d"],
-                                      ties["tie_kappa"], ties["tie_D"], ties["tie_energy"], fc)
+    def _stack_facet_pairs(self):
+        (self.facet_pairs,), (pair_off,) = stack_groups(self.facet_sets, {"pairs": ((2,), I8)})
+        self.facet_off = np.ascontiguousarray(
+            np.stack([self.facet_node_off, self.facet_quad_off, pair_off], axis=1))
+
+    def _stack_ties(self):
+        """The cohesive tie groups stacked by kind for :func:`bundle_forces` (their damage
+        histories become views of the stacked ones) and the order in which they act
+        (kind 0: quad, 1: beam; group)."""
+        quad = [t for t in self.ties if t["kind"] == "quad"]
+        beam = [t for t in self.ties if t["kind"] != "quad"]
+        order = [(0, quad.index(t)) if t["kind"] == "quad" else (1, beam.index(t))
+                 for t in self.ties]
+        qa, qo = stack_groups(quad, QUAD_TIE_SPEC, shared=TIE_HISTORY)
+        ba, bo = stack_groups(beam, BEAM_TIE_SPEC, shared=TIE_HISTORY)
+        self.quad_ties = (*qa, np.ascontiguousarray(np.stack([qo[0], qo[6]], axis=1)))
+        self.beam_ties = (*ba, bo[0])
+        self.tie_order = np.array(order, dtype=np.int64).reshape(-1, 2)
 
     def displacement_max(self) -> float:
         return float(np.max(np.abs(self.x - self.mesh.X)))
