@@ -1,6 +1,7 @@
 """The bundle's concurrent force lanes (fe/bundle_lanes.py): the same forces and
-histories (elements, wire-wire and node-facet contact, cohesive ties) as the separate kernels, bit for bit, whatever the beam split; the split
-that balances the lanes is found from the calls' times; meshes whose beams and shells share nodes are refused."""
+histories (elements, wire-wire and node-facet contact, cohesive ties, pins) as the separate
+kernels, bit for bit, whatever the beam split; the split that balances the lanes is found
+from the calls' times; meshes whose beams and shells share nodes are refused."""
 import numpy as np
 import pytest
 
@@ -29,6 +30,8 @@ def _state(s):
     arrays = [*s.wires.hist, s.sstate, *s.ww_hist]
     arrays += [h for fs in s.facet_sets for h in fs["hist"]]
     arrays += [t[k] for t in s.ties for k in ("tie_kappa", "tie_D", "tie_energy")]
+    arrays += [s.wire_pins["hist"], s.pins.force]
+    arrays += [g[k] for g in s.pin_groups for k in ("hist_q", "hist")]
     return arrays
 
 
@@ -65,6 +68,15 @@ def _separate(s, v, dt):
                                   t["tie_anchor"], t["tie_arm"], t["tie_axis"], t["tie_area"],
                                   s.seg, s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"],
                                   t["tie_kappa"], t["tie_D"], t["tie_energy"], F[5])
+    p, w = s.pins, s.wire_pins
+    p.force[...] = 0.0
+    n += ce.chain_cylinder_contact(s.x, v, s.seg, s.seg_r, w["start"], w["mu"], p.centres, p.axes,
+                                   p.radii, p.velocity, w["k"], w["k"], dt, w["hist"], F[3], F[4],
+                                   p.force)
+    for g in s.pin_groups:
+        n += ce.facets_cylinder_contact(s.x, v, g["quads"], g["t"], g["mu"], p.centres, p.axes,
+                                        p.radii, g["slack"], p.velocity, g["k"], g["k"], dt,
+                                        g["hist_q"], g["hist"], F[3], F[4], p.force)
     return F, n
 
 
@@ -72,6 +84,7 @@ def _lanes(s, v, dt, split):
     """The system's lanes call at a given beam split."""
     F = np.zeros((6,) + s.mass.shape)
     s.beam_split.current = lambda: split
+    s.cyl_force[...] = 0.0
     try:
         n = s._bundle_forces(v, dt, F)
     finally:
@@ -88,6 +101,7 @@ def test_lanes_equal_the_separate_kernels_bit_for_bit_at_any_split(pressed_bundl
     assert n_ref > 50                                 # the wires touch: the contact is exercised
     assert np.abs(F_ref[2]).max() > 0.0               # with friction
     assert np.abs(F_ref[5]).max() > 0.0               # and loaded ties
+    assert np.abs(F_ref[3]).max() > 0.0               # and the pins pressing
     assert any(not np.array_equal(a, b) for a, b in zip(start, ref))   # histories advanced
     n_el = s.wires.conn.shape[0]
     for split in (0, 1, n_el // 3, n_el - 1, n_el):

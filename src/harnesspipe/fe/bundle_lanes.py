@@ -12,8 +12,8 @@ serial kernels run side by side,
   the beams ``0 .. split - 1`` (:func:`harnesspipe.fe.beam_explicit.beam_range_forces`);
 * lane 1: the shells (:func:`harnesspipe.fe.shell_bt.shell_element_forces_serial`), the
   cohesive ties (:func:`~harnesspipe.fe.contact_explicit.cohesive_ties_quad_serial`,
-  :func:`~harnesspipe.fe.contact_explicit.cohesive_ties_beam`) and the beams
-  ``split .. n - 1``,
+  :func:`~harnesspipe.fe.contact_explicit.cohesive_ties_beam`), the rigid cylinders (the
+  pins) against wires and shells and the beams ``split .. n - 1``,
 
 with one barrier at the end, after which the beams' forces are scattered to their nodes
 (the two ranges share a node).  The contact's cost grows with the number of touching
@@ -21,10 +21,10 @@ pairs over a run and differs between bundles, so the split that balances the lan
 found and followed from the calls' wall time (:class:`BeamSplit`).  The lanes write
 disjoint memory: the beams add into the wire nodes' rows of the element family, the
 shells into the shell nodes' rows (the mesh keeps wire and shell nodes apart;
-:func:`check_disjoint`), the contacts (lane 0) and the ties (lane 1) into their own
-families.  The results are those of the separate kernels called one after the other, bit
+:func:`check_disjoint`), the bundle's contacts (lane 0), the ties and the cylinders'
+contacts (lane 1) into their own families.  The results are those of the separate kernels called one after the other, bit
 for bit: every kernel does the same arithmetic in the same order, whatever the split.
-The loading's contacts (pins, clamps) stay with the system that owns them.
+Other loadings (the branch test's strand) stay with the system that owns them.
 """
 from __future__ import annotations
 
@@ -32,8 +32,10 @@ import numpy as np
 from numba import njit, prange
 
 from harnesspipe.fe.beam_explicit import beam_range_forces, beam_scatter
-from harnesspipe.fe.contact_explicit import (beam_beam_contact_serial, cohesive_ties_beam,
-                                             cohesive_ties_quad_serial, node_facet_contact_serial)
+from harnesspipe.fe.contact_explicit import (beam_beam_contact_serial,
+                                             chain_cylinder_contact_serial, cohesive_ties_beam,
+                                             cohesive_ties_quad_serial, facets_cylinder_contact,
+                                             node_facet_contact_serial)
 from harnesspipe.fe.shell_bt import scatter_add, shell_element_forces_serial
 
 
@@ -60,7 +62,9 @@ def bundle_forces(
         bt_node, bt_seg, bt_s, bt_anchor, bt_arm, bt_axis, bt_area, bt_kappa, bt_D,
         bt_energy, bt_off,                                          # ties to beams
         K, delta0, delta_f, alpha_d, tie_order,                     # cohesive law
-        f_el, f_n, f_t, f_c):
+        cyl_c, cyl_axis, cyl_R, cyl_v, chain_start, chain_mu, chain_k, chain_hist, pf_quads,
+        pf_t, pf_slack, pf_hist_q, pf_hist, pf_off, pf_prm,         # rigid cylinders (pins)
+        f_el, f_n, f_t, f_c, f_pn, f_pt, f_cyl):
     """Element forces ON the nodes added into ``f_el``, the contacts' normal and friction
     forces into ``f_n``, ``f_t`` and the cohesive ties' into ``f_c``, in the two lanes of
     the module docstring; histories advance in place as in the separate kernels.
@@ -75,11 +79,17 @@ def bundle_forces(
     pairs; ``qt_off`` (n + 1, 2): ties, quads; ``bt_off`` (n + 1,)); ``fs_prm`` (n, 5)
     the sets' (k, pen_max, mu_s, mu_k, d_c); the groups' pair and tie indices are their
     own.  The ties act in the order of ``tie_order`` rows (kind 0: quad, 1: beam; group),
-    with the cohesive law's ``K, delta0, delta_f, alpha_d`` (eqs. 7-10).  Returns the
-    number of active contacts (wire-wire pairs and node-facet contacts)."""
+    with the cohesive law's ``K, delta0, delta_f, alpha_d`` (eqs. 7-10).  Rigid cylinders
+    (the test's pins; none: zero rows) meet the wires as chains
+    (:func:`~harnesspipe.fe.contact_explicit.chain_cylinder_contact`: ``chain_*``) and the
+    stacked shell facet groups
+    (:func:`~harnesspipe.fe.contact_explicit.facets_cylinder_contact`: ``pf_*``, ``pf_off``
+    (n + 1, 2): quads, rows of the per-cylinder arrays; ``pf_prm`` (n, 2): mu, penalty),
+    their forces into ``f_pn``, ``f_pt`` and ``f_cyl`` (ON the cylinders).  Returns the
+    number of active contacts (wire-wire pairs, node-facet and cylinder contacts)."""
     n_el = conn.shape[0]
     split = min(max(beam_split, 0), n_el)
-    n_act = np.empty(1, dtype=np.int64)
+    n_act = np.empty(2, dtype=np.int64)
     for lane in prange(2):
         if lane == 0:
             n = beam_beam_contact_serial(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s,
@@ -97,10 +107,13 @@ def bundle_forces(
                   qt_kappa, qt_D, qt_energy, qt_off, bt_node, bt_seg, bt_s, bt_anchor, bt_arm,
                   bt_axis, bt_area, bt_kappa, bt_D, bt_energy, bt_off, K, delta0, delta_f,
                   alpha_d, tie_order, f_c)
+            n_act[1] = _cylinders(x, v, seg, seg_r, cyl_c, cyl_axis, cyl_R, cyl_v, chain_start,
+                                  chain_mu, chain_k, chain_hist, pf_quads, pf_t, pf_slack,
+                                  pf_hist_q, pf_hist, pf_off, pf_prm, dt, f_pn, f_pt, f_cyl)
             beam_range_forces(split, n_el, X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z,
                               sec_area, sec_GJ, sec_id, mats, sec_id, eps_p, alpha, sa_h, b_el)
     beam_scatter(conn, b_el, f_el, -1.0)
-    return n_act[0]
+    return n_act[0] + n_act[1]
 
 
 @njit(cache=True)
@@ -141,6 +154,38 @@ def _ties(x, quat, seg, qt_node, qt_quad, qt_xi, qt_sign, qt_offset, qt_area, qt
                                bt_arm[a:b], bt_axis[a:b], bt_area[a:b], seg, K, delta0,
                                delta_f, alpha_d, bt_kappa[a:b], bt_D[a:b], bt_energy[a:b],
                                f_c)
+
+
+@njit(cache=True)
+def _cylinders(x, v, seg, seg_r, cyl_c, cyl_axis, cyl_R, cyl_v, chain_start, chain_mu, chain_k,
+               chain_hist, pf_quads, pf_t, pf_slack, pf_hist_q, pf_hist, pf_off, pf_prm, dt,
+               f_pn, f_pt, f_cyl):
+    """The rigid cylinders of :func:`bundle_forces` against the wires, then against each
+    facet group; returns the number of active contacts."""
+    n = chain_cylinder_contact_serial(x, v, seg, seg_r, chain_start, chain_mu, cyl_c, cyl_axis,
+                                      cyl_R, cyl_v, chain_k, chain_k, dt, chain_hist, f_pn,
+                                      f_pt, f_cyl)
+    for g in range(pf_prm.shape[0]):
+        q0, q1 = pf_off[g, 0], pf_off[g + 1, 0]
+        r0, r1 = pf_off[g, 1], pf_off[g + 1, 1]
+        n += facets_cylinder_contact(x, v, pf_quads[q0:q1], pf_t[q0:q1], pf_prm[g, 0], cyl_c,
+                                     cyl_axis, cyl_R, pf_slack[r0:r1], cyl_v, pf_prm[g, 1],
+                                     pf_prm[g, 1], dt, pf_hist_q[r0:r1], pf_hist[r0:r1], f_pn,
+                                     f_pt, f_cyl)
+    return n
+
+
+def no_cylinders():
+    """The rigid-cylinder arguments of :func:`bundle_forces` for a bundle without any, and
+    the (empty) force on them."""
+    i8, f8 = np.int64, float
+    patches = 1
+    cylinders = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3)),
+                 np.zeros(1, dtype=i8), 0.0, 0.0, np.zeros((0, 0, 3)),
+                 np.zeros((0, 4), dtype=i8), np.zeros(0, dtype=f8), np.zeros(0),
+                 np.zeros((0, patches), dtype=i8), np.zeros((0, patches, 3)),
+                 np.zeros((1, 2), dtype=i8), np.zeros((0, 2)))
+    return cylinders, np.zeros((0, 3))
 
 
 def stack_groups(groups: list, spec: dict, shared: tuple = ()):

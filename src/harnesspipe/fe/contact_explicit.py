@@ -857,10 +857,36 @@ def chain_cylinder_contact(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, c
         for w in range(task * size, min(n_ch, (task + 1) * size)):
             _chain_pins(x, v, seg, seg_r, chain_start, w, mu, cyl_c, cyl_axis, cyl_R, cyl_v,
                         k_n, k_t, dt, hist_ft, f_n, f_t, part, act, nv, dg, fold, fnew, ds)
-    n_active = 0
+    return _chain_sum(act, part, f_cyl)
+
+
+@njit(cache=True)
+def chain_cylinder_contact_serial(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, cyl_R,
+                                  cyl_v, k_n, k_t, dt, hist_ft, f_n, f_t, f_cyl):
+    """Serial twin of :func:`chain_cylinder_contact` (for a caller that runs it beside
+    other work); the same arithmetic, the same results."""
+    n_ch = chain_start.shape[0] - 1
+    part = np.zeros((n_ch, cyl_c.shape[0], 3))
+    act = np.zeros(n_ch, dtype=np.int64)
+    nv = np.empty(3)
+    dg = np.empty(3)
+    fold = np.empty(3)
+    fnew = np.empty(3)
+    ds = np.empty(3)
     for w in range(n_ch):
+        _chain_pins(x, v, seg, seg_r, chain_start, w, mu, cyl_c, cyl_axis, cyl_R, cyl_v, k_n,
+                    k_t, dt, hist_ft, f_n, f_t, part, act, nv, dg, fold, fnew, ds)
+    return _chain_sum(act, part, f_cyl)
+
+
+@njit(cache=True)
+def _chain_sum(act, part, f_cyl):
+    """The cylinders' forces summed over the chains, in chain order; returns the number
+    of active (chain, cylinder) contacts."""
+    n_active = 0
+    for w in range(act.shape[0]):
         n_active += act[w]
-        for c in range(n_cyl):
+        for c in range(part.shape[1]):
             for k in range(3):
                 f_cyl[c, k] += part[w, c, k]
     return n_active

@@ -30,7 +30,8 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe.fe import contact_explicit as ce
-from harnesspipe.fe.bundle_lanes import BeamSplit, bundle_forces, check_disjoint, stack_groups
+from harnesspipe.fe.bundle_lanes import (BeamSplit, bundle_forces, check_disjoint, no_cylinders,
+                                         stack_groups)
 from harnesspipe.fe.dynamics import DynamicsSettings, integrate, prescribed_work
 from harnesspipe.fe.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
@@ -45,7 +46,7 @@ from harnesspipe.models.tube_equivalent import from_config as tube_equivalent
 FAMILIES = ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive", "damping")
 MAX_LIGHT_SCALE = 16.0   # cap of the selective shell mass scaling (the tape on its bond needs ~13)
 PIN_PATCHES = 4          # contacts of one shell part with one pin at most (connected patches: an open tube's lips)
-LANES_PHASE = "elements, bundle contact and ties"   # one phase: concurrent lanes (fe/bundle_lanes.py)
+LANES_PHASE = "elements, contact and ties"   # one phase: concurrent lanes (fe/bundle_lanes.py)
 TIE_TOL = {hm.TIE_COVERING: 0.3, hm.TIE_WIRES: 0.5, hm.TIE_TAPE: 0.3}   # mm: facet chord sag / hexagonal bundle under a round band
 I8, F8 = np.int64, float
 FACET_SPEC = {"nodes": ((), I8), "r": ((), F8), "quads": ((4,), I8), "t": ((), F8),
@@ -60,6 +61,8 @@ BEAM_TIE_SPEC = {"tie_node": ((), I8), "tie_seg": ((), I8), "tie_s": ((), F8),
                  "tie_area": ((), F8), "tie_kappa": ((), F8), "tie_D": ((), F8),
                  "tie_energy": ((), F8)}                       # stacked ties to beams
 TIE_HISTORY = ("tie_kappa", "tie_D", "tie_energy")
+PIN_FACET_SPEC = {"quads": ((4,), I8), "t": ((), F8), "slack": ((), F8),
+                  "hist_q": ((PIN_PATCHES,), I8), "hist": ((PIN_PATCHES, 3), F8)}   # pins vs shells
 
 
 @dataclass
@@ -111,9 +114,11 @@ class BundleSystem:
     """A bundle of wires with its coverings, tape, contacts and cohesive ties, integrated by
     :mod:`harnesspipe.fe.dynamics`; the loading (pins, clamps, a strand) is the subclass's.
 
-    Subclasses set ``free``, add their loading contacts in :meth:`_loading_forces` (into the
-    families ``pin_contact`` / ``pin_friction``), move their rigid bodies in
-    :meth:`_move_loading` and supply ``external_work`` and ``observe``.
+    Subclasses set ``free``, give their rigid cylinders (pins) as :attr:`cylinders` and
+    :attr:`cyl_force` (:func:`harnesspipe.fe.bundle_lanes.bundle_forces`) or add other
+    loading forces in :meth:`_loading_forces` (both into the families ``pin_contact`` /
+    ``pin_friction``), move their rigid bodies in :meth:`_move_loading` and supply
+    ``external_work`` and ``observe``.
     """
 
     families = FAMILIES
@@ -157,9 +162,10 @@ class BundleSystem:
         self.shell_mass_scale = self._scale_to_wire_step()
         self.dt0 = 2.0 / np.sqrt(self.node_omega2().max())
         self._setup_contacts()
-        self.phase = {k: 0.0 for k in (LANES_PHASE, "contact search", "loading contact and damping")}
+        self.phase = {k: 0.0 for k in (LANES_PHASE, "contact search", "strand and damping")}
         self._stack_facet_sets()
         self._stack_ties()
+        self.cylinders, self.cyl_force = no_cylinders()
         self.pairs_max = 0
         self.active = 0
 
@@ -168,8 +174,9 @@ class BundleSystem:
         return shell_materials(self.mesh, self.inp)
 
     def _loading_forces(self, v, dt, F) -> int:
-        """Add the loading's contact forces to ``F``; returns the number of active contacts."""
-        raise NotImplementedError
+        """Add the forces of a loading that is not a rigid cylinder (a strand) to ``F``;
+        returns the number of active contacts."""
+        return 0
 
     def _move_loading(self, t) -> None:
         raise NotImplementedError
@@ -466,6 +473,7 @@ class BundleSystem:
         if self.x_search is None or max_drift2(self.x, self.x_search) > (0.5 * self.margin) ** 2:
             self._search()          # some pair may have closed in by a margin: search anew
         t1 = clock()
+        self.cyl_force[...] = 0.0
         active = self._cut_forces(F[1]) if self.cut is not None else 0
         active += self._bundle_forces(v, dt, F)
         t2 = clock()
@@ -476,7 +484,7 @@ class BundleSystem:
             F[6] *= -self.c_damp
         t3 = clock()
         for name, a, b in (("contact search", t0, t1), (LANES_PHASE, t1, t2),
-                           ("loading contact and damping", t2, t3)):
+                           ("strand and damping", t2, t3)):
             self.phase[name] += b - a
         self.active = active
         self.pairs_max = max(self.pairs_max, active)
@@ -484,7 +492,8 @@ class BundleSystem:
 
     def _bundle_forces(self, v, dt, F) -> int:
         """Beam and shell forces ON the nodes into ``F[0]``, the wire-wire and node-facet
-        contacts into ``F[1]``, ``F[2]``, the cohesive ties into ``F[5]``, in two concurrent
+        contacts into ``F[1]``, ``F[2]``, the cohesive ties into ``F[5]``, the rigid
+        cylinders' contacts into ``F[3]``, ``F[4]`` (:attr:`cylinders`), in two concurrent
         lanes (:mod:`harnesspipe.fe.bundle_lanes`); returns the number of active
         contacts.  (The open tube's cut is added to ``F[1]`` before: on the covering's
         nodes it comes before the node-facet contact, as it always did.)"""
@@ -498,7 +507,7 @@ class BundleSystem:
             self.ww_hist[1], *self.facet_arrays, self.facet_pairs, self.facet_hist_p,
             self.facet_hist_ft, self.facet_off, self.facet_prm, *self.quad_ties,
             *self.beam_ties, self.K_coh, self.delta0, itf["delta_f"], itf["alpha_d"],
-            self.tie_order, F[0], F[1], F[2], F[5])
+            self.tie_order, *self.cylinders, F[0], F[1], F[2], F[5], F[3], F[4], self.cyl_force)
 
     def _stack_facet_sets(self):
         """The node-facet sets stacked for :func:`bundle_forces` (their histories become
@@ -564,6 +573,7 @@ class HifiSystem(BundleSystem):
         mid = mesh.wire_nodes[centre, mesh.wire_nodes.shape[1] // 2]
         self.free[mid, 0] = self.free[mid, 2] = False    # axial and lateral rigid-body modes
         self._setup_pin_contacts()
+        self.cylinders, self.cyl_force = self._pin_cylinders()
         self.f_pin_prev = np.zeros_like(self.pins.force)
         self.impulse = np.zeros_like(self.pins.force)
         self.impulse_u = self.impulse_time = self.u_prev = 0.0
@@ -614,20 +624,18 @@ class HifiSystem(BundleSystem):
         self.c_prev[...] = self.pins.centres
         self.pins.move_to(t)
 
-    def _loading_forces(self, v, dt, F) -> int:
-        """The pins against the wires (as chains) and the shells' facets (with friction)."""
-        pn, pt = F[3], F[4]
-        p = self.pins
-        p.force[...] = 0.0
-        w = self.wire_pins
-        active = ce.chain_cylinder_contact(self.x, v, self.seg, self.seg_r, w["start"], w["mu"],
-                                            p.centres, p.axes, p.radii, p.velocity, w["k"],
-                                            w["k"], dt, w["hist"], pn, pt, p.force)
-        for g in self.pin_groups:
-            active += ce.facets_cylinder_contact(self.x, v, g["quads"], g["t"], g["mu"], p.centres,
-                                                 p.axes, p.radii, g["slack"], p.velocity, g["k"],
-                                                 g["k"], dt, g["hist_q"], g["hist"], pn, pt, p.force)
-        return active
+    def _pin_cylinders(self):
+        """The pins as the rigid cylinders of :func:`bundle_forces`: against the wires as
+        chains and against each shell part's facets (the groups stacked; their histories
+        become views of the stacked ones).  The pins' centres and velocities are the very
+        arrays :meth:`_move_loading` updates."""
+        p, w = self.pins, self.wire_pins
+        arrays, off = stack_groups(self.pin_groups, PIN_FACET_SPEC, shared=("hist_q", "hist"))
+        prm = np.array([[g["mu"], g["k"]] for g in self.pin_groups], dtype=float).reshape(-1, 2)
+        cylinders = (p.centres, p.axes, p.radii, p.velocity, w["start"], w["mu"], w["k"],
+                     w["hist"], *arrays, np.ascontiguousarray(np.stack([off[0], off[2]], axis=1)),
+                     prm)
+        return cylinders, p.force
 
     def external_work(self, t0, t1) -> float:
         """Work of the pins on the system: F_on_system = -force on the pin.  Also adds the
