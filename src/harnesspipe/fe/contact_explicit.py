@@ -26,7 +26,10 @@ per-pair arrays, then a serial scatter adds them to the nodes (no races).  Wire-
 flags the touching pairs (with an early bounding-box reject of far candidates), then
 computes forces and friction for those only; node-facet rejects pairs whose node is far
 from the quad's box before projecting (see :func:`_nf_project`) and updates its history
-in place.
+in place.  Each parallel kernel has a serial twin built from the same pieces
+(``*_serial``): the hi-fi bundle runs those side by side in two lanes
+(:mod:`harnesspipe.fe.bundle_lanes`), and the parallel kernels -- for a caller that runs
+one kernel at a time -- are the lanes' reference in the tests.
 
 History.  Each call is one committed explicit step: friction and cohesive history
 arrays are updated IN PLACE.  Do not call a kernel twice for the same step.
