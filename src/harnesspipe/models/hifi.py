@@ -534,10 +534,11 @@ class BundleSystem:
         """The cohesive tie groups stacked by kind for :func:`bundle_forces` (their damage
         histories become views of the stacked ones) and the order in which they act
         (kind 0: quad, 1: beam; group)."""
-        quad = [t for t in self.ties if t["kind"] == "quad"]
-        beam = [t for t in self.ties if t["kind"] != "quad"]
-        order = [(0, quad.index(t)) if t["kind"] == "quad" else (1, beam.index(t))
-                 for t in self.ties]
+        quad, beam, order = [], [], []
+        for t in self.ties:
+            group = quad if t["kind"] == "quad" else beam
+            order.append((0 if group is quad else 1, len(group)))
+            group.append(t)
         qa, qo = stack_groups(quad, QUAD_TIE_SPEC, shared=TIE_HISTORY)
         ba, bo = stack_groups(beam, BEAM_TIE_SPEC, shared=TIE_HISTORY)
         self.quad_ties = (*qa, np.ascontiguousarray(np.stack([qo[0], qo[6]], axis=1)))
