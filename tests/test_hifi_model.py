@@ -131,6 +131,40 @@ def test_balance_error_is_the_bounded_verlet_term_and_does_not_drift():
     assert b[-40:].max() <= 1.5 * b[:40].max()    # no drift
 
 
+
+def test_close_and_kick_is_the_closing_half_step_then_the_next_opening():
+    """close_and_kick (one step's closing half kick and the next's opening, fused) against
+    the velocity-Verlet formulas; the closed step's work and KE do not depend on the next
+    step, and h_next = 0 opens nothing (the last step; from rest, hdt = 0 closes nothing)."""
+    from harnesspipe.fe.dynamics import close_and_kick
+    rng = np.random.default_rng(5)
+    n, P, hdt, h1 = 7, 3, 2e-4, 3e-4
+    F = rng.standard_normal((P, n, 6))
+    m = rng.random((n, 6)) + 0.5
+    free = rng.random((n, 6)) > 0.2
+    v0, du = rng.standard_normal((n, 6)), rng.standard_normal((n, 6))
+    W0 = rng.standard_normal(P)
+    out = {}
+    for h in (h1, 0.0):
+        v, W, W_end = v0.copy(), W0.copy(), np.zeros(P)
+        f, du_next = np.zeros((n, 6)), np.zeros((n, 6))
+        ke, w_total = close_and_kick(F, du, du_next, W, W_end, v, 1.0 / m, free, hdt, m, f, h)
+        out[h] = (v, W, W_end, du_next, ke, w_total, f)
+    f = F.sum(axis=0)
+    v_end = np.where(free, v0 + hdt * f / m, 0.0)
+    W_end = W0 + 0.5 * np.einsum("pij,ij->p", F, du)
+    v1 = np.where(free, v_end + 0.5 * h1 * f / m, 0.0)
+    for h, v_ref in ((h1, v1), (0.0, v_end)):
+        v, W, W_got, du_next, ke, w_total, f_got = out[h]
+        assert np.allclose(f_got, f, rtol=1e-15, atol=0.0)
+        assert np.allclose(W_got, W_end, rtol=1e-14, atol=0.0)
+        assert ke == pytest.approx(0.5 * np.sum(m * v_end**2), rel=1e-14)
+        assert w_total == pytest.approx(W_end.sum(), rel=1e-14)
+        assert np.allclose(v, v_ref, rtol=1e-14, atol=0.0)
+        assert np.allclose(du_next, h * v_ref, rtol=1e-14, atol=0.0)
+        assert np.allclose(W, W_end + 0.5 * np.einsum("pij,ij->p", F, du_next), rtol=1e-14)
+    assert np.array_equal(out[0.0][1], out[0.0][2]) and not out[0.0][3].any()
+
 SUMMARY_KEYS = {"wall_s", "steps", "dt", "f_m", "ke_ie_max", "energy_error", "n_beam_elements",
                 "n_shell_elements", "contact_pairs_max"}
 

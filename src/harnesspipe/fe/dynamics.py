@@ -47,78 +47,73 @@ from harnesspipe.fe.explicit import ExplicitError
 
 
 @njit(cache=True)
-def kick_drift(v, f, minv, free, hdt, h, du, F, W):
-    """The start of a step: ``v += hdt M^-1 f`` on the free dofs (``f`` (n, 6) the total
-    force), the drift ``du = h v`` and the first half of every family's trapezoidal work,
-    ``W[p] += 1/2 F_p . du`` with the forces ``F`` (P, n, 6) at the start of the step."""
-    N = v.size
-    vv = v.reshape(N)
-    ff = f.reshape(N)
-    mi = minv.reshape(N)
-    fr = free.reshape(N)
-    d = du.reshape(N)
-    for q in range(N):
-        if fr[q]:
-            vv[q] += hdt * ff[q] * mi[q]
-        else:
-            vv[q] = 0.0
-        d[q] = h * vv[q]
-    _half_work(F, d, W, d[:0])
+def close_and_kick(F, du, du_next, W, W_end, v, minv, free, hdt, m, f, h_next):
+    """The end of a step and the start of the next, with the forces ``F`` (P, n, 6) at the
+    step's end: the total force ``f = sum_p F_p``, the closing half kick ``v += hdt M^-1 f``
+    and the kinetic energy ``1/2 v . M v``; then the next step's opening half kick by
+    ``h_next / 2`` and its drift ``du_next = h_next v``.  Every family's work takes its
+    two halves with the same forces, ``W[p] += 1/2 F_p . du`` (closing this step; the
+    closed works are copied to ``W_end``) and ``W[p] += 1/2 F_p . du_next`` (opening
+    the next).  Returns the kinetic energy and ``sum_p W_end[p]``.  ``h_next = 0`` closes
+    the last step (v and W unchanged by the opening, ``du_next = 0``).
 
-
-@njit(cache=True)
-def _half_work(F, d, W, tot):
-    """``W[p] += 1/2 F_p . d`` for every family (``d`` flat) and ``tot += sum_p F_p``
-    (flat; pass a zero-size array to skip it), each dot product in four interleaved
-    partial sums (one running sum waits on every addition's latency)."""
-    P = F.shape[0]
-    N = d.size
-    Fp = F.reshape(P, N)
-    N4 = N - N % 4
-    for p in range(P):
-        s0 = s1 = s2 = s3 = 0.0
-        for q in range(0, N4, 4):
-            s0 += Fp[p, q] * d[q]
-            s1 += Fp[p, q + 1] * d[q + 1]
-            s2 += Fp[p, q + 2] * d[q + 2]
-            s3 += Fp[p, q + 3] * d[q + 3]
-        for q in range(N4, N):
-            s0 += Fp[p, q] * d[q]
-        W[p] += 0.5 * ((s0 + s1) + (s2 + s3))
-        if tot.size:
-            for q in range(N):
-                tot[q] += Fp[p, q]
-
-
-@njit(cache=True)
-def close_step(F, du, W, v, minv, free, hdt, m, f):
-    """The end of a step, with the forces ``F`` (P, n, 6) at its end: the second half of
-    every family's work ``W[p] += 1/2 F_p . du``, the total force ``f = sum_p F_p`` and
-    the closing half kick ``v += hdt M^-1 f``; returns the kinetic energy ``1/2 v . M v``
-    and the families' total work ``sum_p W[p]``.  Family by family over contiguous memory
-    (:func:`_half_work`; the families are the integrator's largest arrays)."""
+    Three passes over memory: the total force, the velocities, and both halves of the
+    work in one read of the families (:func:`_half_works`)."""
     P, n, k = F.shape
     N = n * k
     Fp = F.reshape(P, N)
-    d = du.reshape(N)
     tot = f.reshape(N)
     vv = v.reshape(N)
     mi = minv.reshape(N)
     mm = m.reshape(N)
     fr = free.reshape(N)
+    d1 = du_next.reshape(N)
     tot[:] = 0.0
-    _half_work(F, d, W, tot)
-    w_total = 0.0
-    for p in range(P):
-        w_total += W[p]
+    for p in range(P):          # family by family: contiguous memory
+        for q in range(N):
+            tot[q] += Fp[p, q]
+    hdt_next = 0.5 * h_next
     ke = 0.0
     for q in range(N):
         if fr[q]:
             vv[q] += hdt * tot[q] * mi[q]
+            ke += mm[q] * vv[q] * vv[q]
+            vv[q] += hdt_next * tot[q] * mi[q]
         else:
             vv[q] = 0.0
-        ke += mm[q] * vv[q] * vv[q]
+        d1[q] = h_next * vv[q]
+    w_total = _half_works(Fp, du.reshape(N), d1, W, W_end)
     return 0.5 * ke, w_total
+
+
+@njit(cache=True)
+def _half_works(Fp, d0, d1, W, W_end):
+    """``W[p] += 1/2 F_p . d0``, ``W_end[p] = W[p]``, ``W[p] += 1/2 F_p . d1`` for every
+    family (``Fp`` (P, N)), each dot product in four interleaved partial sums (one running sum
+    waits on every addition's latency); returns ``sum_p W_end[p]``."""
+    P, N = Fp.shape
+    N4 = N - N % 4
+    w_total = 0.0
+    for p in range(P):
+        a0 = a1 = a2 = a3 = 0.0
+        b0 = b1 = b2 = b3 = 0.0
+        for q in range(0, N4, 4):
+            a0 += Fp[p, q] * d0[q]
+            a1 += Fp[p, q + 1] * d0[q + 1]
+            a2 += Fp[p, q + 2] * d0[q + 2]
+            a3 += Fp[p, q + 3] * d0[q + 3]
+            b0 += Fp[p, q] * d1[q]
+            b1 += Fp[p, q + 1] * d1[q + 1]
+            b2 += Fp[p, q + 2] * d1[q + 2]
+            b3 += Fp[p, q + 3] * d1[q + 3]
+        for q in range(N4, N):
+            a0 += Fp[p, q] * d0[q]
+            b0 += Fp[p, q] * d1[q]
+        W[p] += 0.5 * ((a0 + a1) + (a2 + a3))
+        W_end[p] = W[p]
+        w_total += W[p]
+        W[p] += 0.5 * ((b0 + b1) + (b2 + b3))
+    return w_total
 
 
 @njit(cache=True)
@@ -187,48 +182,55 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
     minv = np.where(m > 0.0, 1.0 / np.where(m > 0.0, m, 1.0), 0.0)
     free = system.free
     v = np.zeros_like(m)
-    du = np.zeros_like(m)
-    W = np.zeros(len(names))
+    du = np.zeros_like(m)           # this step's drift
+    du_next = np.zeros_like(m)      # the next step's, made as this one closes
+    W = np.zeros(len(names))        # families' work, with the next step's opening half
+    W_end = np.zeros(len(names))    # families' work at the end of the last closed step
     dt = settings.safety * system.stable_step()
     F = system.forces(0.0, v, dt)
-    f = F.sum(axis=0)                   # total force on the nodes
+    f = np.zeros_like(m)                # total force on the nodes
     w_ext = 0.0
     ke_ie = bal_max = 0.0
     t = 0.0
     step = 0
+    end = total_time * (1.0 - 1e-12)
     ke_ie_from = settings.ke_ie_from * total_time
     out_dt = total_time / settings.n_output
     next_out = out_dt
     rows = [_row(0.0, 0.0, -W, 0.0, names, system.observe(0.0))]
     if on_output is not None:
         on_output(0, 0.0)
-    while t < total_time * (1.0 - 1e-12):
+    h = min(dt, total_time)
+    close_and_kick(F, du, du_next, W, W_end, v, minv, free, 0.0, m, f, h)   # from rest
+    du, du_next = du_next, du
+    while t < end:
         step += 1
-        if step % settings.recheck_every == 0:
-            dt = min(dt, settings.safety * system.stable_step())
-        h = min(dt, total_time - t)
-        kick_drift(v, f, minv, free, 0.5 * h, h, du, F, W)
         t_new = t + h
         system.advance(du, t_new)
         F = system.forces(t_new, v, h)
-        ke, w_total = close_step(F, du, W, v, minv, free, 0.5 * h, m, f)
+        if (step + 1) % settings.recheck_every == 0:
+            dt = min(dt, settings.safety * system.stable_step())
+        h_next = min(dt, total_time - t_new) if t_new < end else 0.0
+        ke, w_total = close_and_kick(F, du, du_next, W, W_end, v, minv, free, 0.5 * h, m, f,
+                                     h_next)
+        du, du_next = du_next, du
         w_ext += system.external_work(t, t_new)
         t = t_new
         # KE + sum_p (-W_p) = W_ext; the driven family's absorbed energy includes W_ext
         balance = abs(ke - w_total - (0.0 if i_drv is not None else w_ext))
         if not math.isfinite(balance):
-            raise ExplicitError("non-finite state", step, t, ke, -W[i_int], w_ext, h)
+            raise ExplicitError("non-finite state", step, t, ke, -W_end[i_int], w_ext, h)
         if balance > settings.energy_stop * abs(w_ext) + settings.energy_floor:
             raise ExplicitError(f"energy balance error {balance:.4g} > {settings.energy_stop:g} "
                                 f"|W_ext| + {settings.energy_floor:g}", step, t, ke,
-                                -W[i_int], w_ext, h)
+                                -W_end[i_int], w_ext, h)
         bal_max = max(bal_max, balance)
         if t > ke_ie_from:
-            ie = -W[i_int]
+            ie = -W_end[i_int]
             if ie > 0.0:
                 ke_ie = max(ke_ie, ke / ie)
-        if t >= next_out - 1e-12 * total_time or t >= total_time * (1.0 - 1e-12):
-            absorbed = -W
+        if t >= next_out - 1e-12 * total_time or t >= end:
+            absorbed = -W_end
             if i_drv is not None:
                 absorbed[i_drv] += w_ext
             umax = system.displacement_max()
@@ -239,6 +241,7 @@ def integrate(system, total_time: float, settings: DynamicsSettings = DynamicsSe
             next_out += out_dt
             if on_output is not None:
                 on_output(step, t)
+        h = h_next
     history = pd.DataFrame(rows)
     err = bal_max / max(abs(w_ext), settings.energy_floor)
     return DynamicsResult(history, dt, step, ke_ie, err, time.perf_counter() - t0)

@@ -250,24 +250,36 @@ def rotate_nodes(quat, dw):
 
 
 @njit(cache=True)
+def spun_quat(q0, q1, q2, q3, w0, w1, w2):
+    """The unit quaternion ``q`` after the spatial spin ``w``, exp(S(w)) q normalised: the
+    arithmetic of :func:`rotate_spatial` on scalars (kept in registers in a node loop)."""
+    a = np.sqrt(w0 ** 2 + w1 ** 2 + w2 ** 2)
+    if a < SMALL_ANGLE:
+        s = 0.5 - a * a / 48.0
+        p0 = 1.0 - a * a / 8.0
+    else:
+        s = np.sin(0.5 * a) / a
+        p0 = np.cos(0.5 * a)
+    p1, p2, p3 = s * w0, s * w1, s * w2
+    o0 = p0 * q0 - p1 * q1 - p2 * q2 - p3 * q3
+    o1 = p0 * q1 + p1 * q0 + p2 * q3 - p3 * q2
+    o2 = p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1
+    o3 = p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0
+    r = 1.0 / np.sqrt(o0 ** 2 + o1 ** 2 + o2 ** 2 + o3 ** 2)
+    return o0 * r, o1 * r, o2 * r, o3 * r
+
+
+@njit(cache=True)
 def move_nodes(x, quat, du, n_rot):
     """One explicit drift of the nodes: ``x += du[:, :3]`` for every node (x (n, 3)),
     and the spatial spins ``du[:n_rot, 3:]`` applied to ``quat[:n_rot]`` as
-    :func:`rotate_nodes` does (same arithmetic, no per-node views)."""
+    :func:`rotate_nodes` does (same arithmetic, :func:`spun_quat`)."""
     for i in range(x.shape[0]):
         for k in range(3):
             x[i, k] += du[i, k]
-    w = np.empty(3)
-    q = np.empty(4)
-    work4 = np.empty(4)
     for i in range(n_rot):
-        for k in range(3):
-            w[k] = du[i, 3 + k]
-        for k in range(4):
-            q[k] = quat[i, k]
-        rotate_spatial(q, w, work4)
-        for k in range(4):
-            quat[i, k] = q[k]
+        quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3] = spun_quat(
+            quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], du[i, 3], du[i, 4], du[i, 5])
 
 
 @njit(cache=True)

@@ -166,6 +166,7 @@ class BundleSystem:
         self._stack_facet_sets()
         self._stack_ties()
         self.cylinders, self.cyl_force = no_cylinders()
+        self._lane_args = self._lane_F = None   # bundle_forces' arguments, for F (_lane_arguments)
         self.pairs_max = 0
         self.active = 0
 
@@ -455,6 +456,7 @@ class BundleSystem:
         for fs in self.facet_sets:
             self._search_set(fs)
         self._stack_facet_pairs()
+        self._lane_args = None      # the pairs and the wire-wire history are new arrays
 
     def _search_set(self, fs):
         lo_n, hi_n = node_aabbs(self.x, fs["nodes"], fs["r"], self.margin)
@@ -496,18 +498,34 @@ class BundleSystem:
         cylinders' contacts into ``F[3]``, ``F[4]`` (:attr:`cylinders`), in two concurrent
         lanes (:mod:`harnesspipe.fe.bundle_lanes`); returns the number of active
         contacts.  (The open tube's cut is added to ``F[1]`` before: on the covering's
-        nodes it comes before the node-facet contact, as it always did.)"""
+        nodes it comes before the node-facet contact, as it always did.)
+
+        The arguments are the system's own arrays, updated in place, so their list is
+        made once and again after each contact search (which replaces the pairs and the
+        wire-wire history); only the split, the velocities and the step change per call."""
+        if self._lane_args is None or self._lane_F is not F:
+            self._lane_args, self._lane_F = self._lane_arguments(F), F
+        args = self._lane_args
+        args[self._i_split] = self.beam_split.current()
+        args[self._i_split + 1] = v
+        args[self._i_split + 6] = dt
+        return bundle_forces(*args)
+
+    def _lane_arguments(self, F) -> list:
+        """The argument list of :func:`bundle_forces` (split, v and dt are set per call)."""
         w, itf = self.wires, self.inp.interface
-        return bundle_forces(
-            w.X0, w.conn, w.R0, self.x, self.quat, w.xi_g, w.w_g, w.sec_y, w.sec_z, w.sec_area,
-            w.sec_GJ, w.sec_id, w.mats, *w.hist, w.f_el, self.beam_split.current(),
-            v, self.sconn, self.sthick, self.smat, self.sstate, dt, self.s_el, HOURGLASS_COEF,
-            self.seg, self.seg_r, self.seg_body, self.ww_pairs, self.k_ww, self.k_ww,
-            itf["mu_s"], itf["mu_k"], itf["d_c"], self.time_scale, self.ww_hist[0],
+        head = [w.X0, w.conn, w.R0, self.x, self.quat, w.xi_g, w.w_g, w.sec_y, w.sec_z,
+                w.sec_area, w.sec_GJ, w.sec_id, w.mats, *w.hist, w.f_el]
+        self._i_split = len(head)
+        return head + [
+            0, None, self.sconn, self.sthick, self.smat, self.sstate, 0.0, self.s_el,
+            HOURGLASS_COEF, self.seg, self.seg_r, self.seg_body, self.ww_pairs, self.k_ww,
+            self.k_ww, itf["mu_s"], itf["mu_k"], itf["d_c"], self.time_scale, self.ww_hist[0],
             self.ww_hist[1], *self.facet_arrays, self.facet_pairs, self.facet_hist_p,
             self.facet_hist_ft, self.facet_off, self.facet_prm, *self.quad_ties,
             *self.beam_ties, self.K_coh, self.delta0, itf["delta_f"], itf["alpha_d"],
-            self.tie_order, *self.cylinders, F[0], F[1], F[2], F[5], F[3], F[4], self.cyl_force)
+            self.tie_order, *self.cylinders, F[0], F[1], F[2], F[5], F[3], F[4],
+            self.cyl_force]
 
     def _stack_facet_sets(self):
         """The node-facet sets stacked for :func:`bundle_forces` (their histories become
