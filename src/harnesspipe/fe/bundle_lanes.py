@@ -178,11 +178,11 @@ def _cylinders(x, v, seg, seg_r, cyl_c, cyl_axis, cyl_R, cyl_v, chain_start, cha
 def no_cylinders():
     """The rigid-cylinder arguments of :func:`bundle_forces` for a bundle without any, and
     the (empty) force on them."""
-    i8, f8 = np.int64, float
+    i8 = np.int64
     patches = 1
     cylinders = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3)),
                  np.zeros(1, dtype=i8), 0.0, 0.0, np.zeros((0, 0, 3)),
-                 np.zeros((0, 4), dtype=i8), np.zeros(0, dtype=f8), np.zeros(0),
+                 np.zeros((0, 4), dtype=i8), np.zeros(0), np.zeros(0),
                  np.zeros((0, patches), dtype=i8), np.zeros((0, patches, 3)),
                  np.zeros((1, 2), dtype=i8), np.zeros((0, 2)))
     return cylinders, np.zeros((0, 3))
