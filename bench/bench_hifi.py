@@ -19,6 +19,7 @@ import argparse
 import os
 import platform
 import statistics
+import time
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +55,66 @@ def run(profile: str, overrides: dict | None = None):
     cfg["profile"] = profile
     cfg["explicit"]["ke_ie_fail"] = 100.0     # measured and reported, not enforced here
     return three_point(inputs(cfg, CASE, overrides or {}))
+
+
+def family_costs(at: float = 0.4, calls: int = 100, repeat: int = 5) -> list[str]:
+    """Cost per call of each force family at the quick model's state ``at`` T into its test
+    (wires touching, fibres yielding): each family's own parallel kernel, one after the
+    other (:mod:`harnesspipe.models.hifi_reference`), against the concurrent lanes that run
+    them in a run; with the contact search and the integrator's step.  Each figure is the
+    median over ``repeat`` rounds of the mean of ``calls`` calls from the same saved state."""
+    from harnesspipe.config import load
+    from harnesspipe.fe.dynamics import DynamicsSettings, close_and_kick, integrate
+    from harnesspipe.models import hifi, hifi_mesh
+    from harnesspipe.models.hifi_reference import (FAMILY_KERNELS, restore_histories,
+                                                   save_histories, separate_forces)
+    from harnesspipe.stages.hifi import inputs
+    cfg = load()
+    cfg["profile"] = "quick"
+    inp = inputs(cfg, CASE, {})
+    s = hifi.HifiSystem(hifi_mesh.build_mesh(inp.case, cfg, inp.resolution), inp)
+    res = integrate(s, at * s.T, DynamicsSettings(safety=inp.explicit["safety"], n_output=2))
+    dt, steps_per_search = res.dt, res.n_steps / s.searches
+    v = np.random.default_rng(0).normal(scale=1e-2, size=s.mass.shape)   # slip and strain rates
+    saved = save_histories(s)
+    F = s.F
+    work = [np.zeros_like(s.mass) for _ in range(4)]
+    W = np.zeros((2, F.shape[0]))
+    minv = np.where(s.mass > 0.0, 1.0 / np.maximum(s.mass, 1e-300), 0.0)
+
+    def per_call(fn, seconds=None):
+        means = []
+        for _ in range(repeat):
+            restore_histories(s, saved)
+            t0 = time.perf_counter()
+            for _ in range(calls):
+                fn()
+            means.append((time.perf_counter() - t0) / calls)
+        return statistics.median(means)
+
+    rounds = [{} for _ in range(repeat)]
+    for r in rounds:
+        restore_histories(s, saved)
+        for _ in range(calls):
+            separate_forces(s, v, dt, r)
+    family = {k: statistics.median(r[k] for r in rounds) / calls for k in FAMILY_KERNELS}
+    lanes = per_call(lambda: s.forces(at * s.T, v, dt))      # the split keeps climbing
+    search = per_call(s._search)
+    row_cost = per_call(lambda: s.observe(at * s.T))
+    du, du_next, v_step, f = work
+    step = per_call(lambda: close_and_kick(F, du, du_next, W[0], W[1], v_step, minv, s.free,
+                                           0.5 * dt, s.mass, f, dt))
+    restore_histories(s, saved)
+    us = {k: f"{1e6 * t:.0f}" for k, t in family.items()}
+    return ["", f"Cost per call at {at:g} T of the quick run ({s.active} active contacts, "
+            f"{s.ww_pairs.shape[0]} wire-wire candidates; median of {repeat} rounds of "
+            f"{calls} calls from the same state, us): each family's own parallel kernel, one "
+            "after the other -- " + ", ".join(f"{k} {t}" for k, t in us.items())
+            + f"; sum {1e6 * sum(family.values()):.0f}.  The system's forces() as a run "
+            f"calls it (the same families in two concurrent lanes): {1e6 * lanes:.0f}.  A contact search "
+            f"{1e6 * search:.0f} (one every {steps_per_search:.0f} steps so far).  The "
+            f"integrator's step (close_and_kick) {1e6 * step:.0f}.  A history row's "
+            f"observations {1e6 * row_cost:.0f} (200 rows a run)."]
 
 
 def timed(profile: str, repeat: int):
@@ -186,6 +247,7 @@ def main() -> None:
         r, med, walls = timed(profile, args.repeat if profile == "quick" else 1)
         results[profile] = r
         lines.append(row(profile, r, med, walls))
+    lines += family_costs()
     cold, cached = jit_seconds(FIRST_RUN)
     lines += ["", f"First run in a fresh process (one thread; quick model built and its first 2 ms integrated): "
                   f"{cold[0]:.1f} s with an empty Numba cache, {cached[0]:.1f} s from the cache."]

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from harnesspipe.config import load
-from harnesspipe.fe import contact_explicit as ce
 from harnesspipe.fe.bundle_lanes import BeamSplit, check_disjoint, stack_groups
 from harnesspipe.fe.dynamics import DynamicsSettings, integrate
-from harnesspipe.fe.shell_bt import HOURGLASS_COEF, shell_forces
 from harnesspipe.models import hifi_mesh as hm
 from harnesspipe.models.hifi import HifiSystem
+from harnesspipe.models.hifi_reference import (history_arrays, restore_histories,
+                                               save_histories, separate_forces)
 from harnesspipe.stages.hifi import inputs
 
 
@@ -24,60 +24,6 @@ def pressed_bundle():
     res = integrate(s, 0.3 * s.T, DynamicsSettings(safety=inp.explicit["safety"], n_output=2))
     v = np.random.default_rng(0).normal(scale=1e-2, size=s.mass.shape)   # slip and strain rates
     return s, v, res.dt
-
-
-def _state(s):
-    arrays = [*s.wires.hist, s.sstate, *s.ww_hist]
-    arrays += [h for fs in s.facet_sets for h in fs["hist"]]
-    arrays += [t[k] for t in s.ties for k in ("tie_kappa", "tie_D", "tie_energy")]
-    arrays += [s.wire_pins["hist"], s.pins.force]
-    arrays += [g[k] for g in s.pin_groups for k in ("hist_q", "hist")]
-    return arrays
-
-
-def _copy(s):
-    return [a.copy() for a in _state(s)]
-
-
-def _restore(s, saved):
-    for a, b in zip(_state(s), saved):
-        a[...] = b
-
-
-def _separate(s, v, dt):
-    """The parallel kernels one after the other, as before the lanes."""
-    F = np.zeros((6,) + s.mass.shape)
-    s.wires.add_forces(s.x, s.quat, F[0])
-    shell_forces(s.x, v, s.sconn, s.sthick, s.smat, s.sstate, dt, s.s_el, F[0], HOURGLASS_COEF, -1.0)
-    itf = s.inp.interface
-    n = ce.beam_beam_contact(s.x, v, s.seg, s.seg_r, s.seg_body, s.ww_pairs, s.k_ww, s.k_ww,
-                             itf["mu_s"], itf["mu_k"], itf["d_c"], dt, s.time_scale,
-                             s.ww_hist[0], s.ww_hist[1], F[1], F[2])
-    for fs in s.facet_sets:
-        n += ce.node_facet_contact(s.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"], fs["sign"],
-                                   fs["pairs"], fs["k"], fs["k"], *fs["mu"], dt, s.time_scale,
-                                   fs["pen_max"], fs["hist"][0], fs["hist"][1], F[1], F[2])
-    for t in s.ties:
-        if t["kind"] == "quad":
-            ce.cohesive_ties_quad(s.x, t["tie_node"], t["tie_quad"], t["tie_xi"], t["tie_sign"],
-                                  t["tie_off"], t["tie_area"], t["quads"], s.K_coh, s.delta0,
-                                  itf["delta_f"], itf["alpha_d"], t["tie_kappa"], t["tie_D"],
-                                  t["tie_energy"], F[5])
-        else:
-            ce.cohesive_ties_beam(s.x, s.quat, t["tie_node"], t["tie_seg"], t["tie_s"],
-                                  t["tie_anchor"], t["tie_arm"], t["tie_axis"], t["tie_area"],
-                                  s.seg, s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"],
-                                  t["tie_kappa"], t["tie_D"], t["tie_energy"], F[5])
-    p, w = s.pins, s.wire_pins
-    p.force[...] = 0.0
-    n += ce.chain_cylinder_contact(s.x, v, s.seg, s.seg_r, w["start"], w["mu"], p.centres, p.axes,
-                                   p.radii, p.velocity, w["k"], w["k"], dt, w["hist"], F[3], F[4],
-                                   p.force)
-    for g in s.pin_groups:
-        n += ce.facets_cylinder_contact(s.x, v, g["quads"], g["t"], g["mu"], p.centres, p.axes,
-                                        p.radii, g["slack"], p.velocity, g["k"], g["k"], dt,
-                                        g["hist_q"], g["hist"], F[3], F[4], p.force)
-    return F, n
 
 
 def _lanes(s, v, dt, split):
@@ -95,9 +41,9 @@ def _lanes(s, v, dt, split):
 def test_lanes_equal_the_separate_kernels_bit_for_bit_at_any_split(pressed_bundle):
     s, v, dt = pressed_bundle
     assert len(s.facet_sets) >= 1 and {t["kind"] for t in s.ties} == {"quad", "beam"}
-    start = _copy(s)
-    F_ref, n_ref = _separate(s, v, dt)
-    ref = _copy(s)
+    start = save_histories(s)
+    F_ref, n_ref = separate_forces(s, v, dt)
+    ref = save_histories(s)
     assert n_ref > 50                                 # the wires touch: the contact is exercised
     assert np.abs(F_ref[2]).max() > 0.0               # with friction
     assert np.abs(F_ref[5]).max() > 0.0               # and loaded ties
@@ -105,12 +51,12 @@ def test_lanes_equal_the_separate_kernels_bit_for_bit_at_any_split(pressed_bundl
     assert any(not np.array_equal(a, b) for a, b in zip(start, ref))   # histories advanced
     n_el = s.wires.conn.shape[0]
     for split in (0, 1, n_el // 3, n_el - 1, n_el):
-        _restore(s, start)
+        restore_histories(s, start)
         F, n = _lanes(s, v, dt, split)
         assert n == n_ref
         assert np.array_equal(F, F_ref), split
-        assert all(np.array_equal(a, b) for a, b in zip(_state(s), ref)), split
-    _restore(s, start)
+        assert all(np.array_equal(a, b) for a, b in zip(history_arrays(s), ref)), split
+    restore_histories(s, start)
 
 
 def test_split_climb_settles_at_the_balanced_split_despite_delays():

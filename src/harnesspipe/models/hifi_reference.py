@@ -1,0 +1,105 @@
+"""The bundle's forces kernel by kernel: each family's parallel kernel called on its own,
+one after the other, as before the concurrent lanes (:mod:`harnesspipe.fe.bundle_lanes`).
+
+The lanes must give these forces and histories bit for bit (tests/test_bundle_lanes.py),
+and the benchmark times each family with them (bench/bench_hifi.py).  Not used by a run.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from harnesspipe.fe import contact_explicit as ce
+from harnesspipe.fe.shell_bt import HOURGLASS_COEF, shell_forces
+
+FAMILY_KERNELS = ("beams", "shells", "wire-wire contact", "node-facet contact",
+                  "cohesive ties", "pins")
+
+
+def history_arrays(s) -> list:
+    """Every array a force call of the pinned bundle ``s`` updates in place."""
+    arrays = [*s.wires.hist, s.sstate, *s.ww_hist]
+    arrays += [h for fs in s.facet_sets for h in fs["hist"]]
+    arrays += [t[k] for t in s.ties for k in ("tie_kappa", "tie_D", "tie_energy")]
+    arrays += [s.wire_pins["hist"], s.pins.force]
+    arrays += [g[k] for g in s.pin_groups for k in ("hist_q", "hist")]
+    return arrays
+
+
+def save_histories(s) -> list:
+    return [a.copy() for a in history_arrays(s)]
+
+
+def restore_histories(s, saved: list) -> None:
+    for a, b in zip(history_arrays(s), saved):
+        a[...] = b
+
+
+def separate_forces(s, v, dt, seconds: dict | None = None):
+    """The forces of :meth:`harnesspipe.models.hifi.BundleSystem._bundle_forces` of the
+    pinned bundle ``s`` (a :class:`~harnesspipe.models.hifi.HifiSystem`) into a new
+    (6, n, 6) array, family kernel by family kernel; returns it and the number of active
+    contacts.  With ``seconds``, each kernel's wall time is added to it under its
+    :data:`FAMILY_KERNELS` name."""
+    F = np.zeros((6,) + s.mass.shape)
+    itf = s.inp.interface
+    clock = _Clock(seconds)
+    s.wires.add_forces(s.x, s.quat, F[0])
+    clock.lap("beams")
+    shell_forces(s.x, v, s.sconn, s.sthick, s.smat, s.sstate, dt, s.s_el, F[0],
+                 HOURGLASS_COEF, -1.0)
+    clock.lap("shells")
+    n = ce.beam_beam_contact(s.x, v, s.seg, s.seg_r, s.seg_body, s.ww_pairs, s.k_ww, s.k_ww,
+                             itf["mu_s"], itf["mu_k"], itf["d_c"], dt, s.time_scale,
+                             s.ww_hist[0], s.ww_hist[1], F[1], F[2])
+    clock.lap("wire-wire contact")
+    for fs in s.facet_sets:
+        n += ce.node_facet_contact(s.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"],
+                                   fs["sign"], fs["pairs"], fs["k"], fs["k"], *fs["mu"], dt,
+                                   s.time_scale, fs["pen_max"], fs["hist"][0], fs["hist"][1],
+                                   F[1], F[2])
+    clock.lap("node-facet contact")
+    _ties(s, itf, F[5])
+    clock.lap("cohesive ties")
+    n += _pins(s, v, dt, F)
+    clock.lap("pins")
+    return F, n
+
+
+class _Clock:
+    def __init__(self, seconds):
+        self.seconds, self.t = seconds, time.perf_counter()
+
+    def lap(self, name):
+        if self.seconds is not None:
+            t = time.perf_counter()
+            self.seconds[name] = self.seconds.get(name, 0.0) + t - self.t
+            self.t = t
+
+
+def _ties(s, itf, f):
+    for t in s.ties:
+        if t["kind"] == "quad":
+            ce.cohesive_ties_quad(s.x, t["tie_node"], t["tie_quad"], t["tie_xi"], t["tie_sign"],
+                                  t["tie_off"], t["tie_area"], t["quads"], s.K_coh, s.delta0,
+                                  itf["delta_f"], itf["alpha_d"], t["tie_kappa"], t["tie_D"],
+                                  t["tie_energy"], f)
+        else:
+            ce.cohesive_ties_beam(s.x, s.quat, t["tie_node"], t["tie_seg"], t["tie_s"],
+                                  t["tie_anchor"], t["tie_arm"], t["tie_axis"], t["tie_area"],
+                                  s.seg, s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"],
+                                  t["tie_kappa"], t["tie_D"], t["tie_energy"], f)
+
+
+def _pins(s, v, dt, F) -> int:
+    p, w = s.pins, s.wire_pins
+    p.force[...] = 0.0
+    n = ce.chain_cylinder_contact(s.x, v, s.seg, s.seg_r, w["start"], w["mu"], p.centres, p.axes,
+                                  p.radii, p.velocity, w["k"], w["k"], dt, w["hist"], F[3], F[4],
+                                  p.force)
+    for g in s.pin_groups:
+        n += ce.facets_cylinder_contact(s.x, v, g["quads"], g["t"], g["mu"], p.centres, p.axes,
+                                        p.radii, g["slack"], p.velocity, g["k"], g["k"], dt,
+                                        g["hist_q"], g["hist"], F[3], F[4], p.force)
+    return n
