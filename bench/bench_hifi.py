@@ -11,7 +11,8 @@ fresh processes with an empty and with a filled Numba cache (JIT cost, reported 
 ``--convergence`` adds the mesh study (the default profile against a finer mesh) and the
 mass-scaling study (f_m = 25 against f_m = 10 at the same simulated time): the largest
 force difference over the curve and its RMS, relative to the peak force.  Writes the section
-"## Hi-fi three-point" of bench/RESULTS.md (replacing that section only).
+"## Hi-fi three-point" of bench/RESULTS.md (replacing that section only, but for its notes
+by hand, "### By hand").
 """
 from __future__ import annotations
 
@@ -24,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchlib import RESULTS, jit_seconds, section_tail, write_section
+from benchlib import BY_HAND, RESULTS, jit_seconds, section_tail, write_section
 
 HEADING = "## Hi-fi three-point"
 CASE = "cwb19_t2_closed"
@@ -266,6 +267,9 @@ def main() -> None:
                   convergence_line("mass scaling: f_m 25 vs 10 at the same t_total", base, light)]
     else:
         lines += previous_convergence()
+    tail = section_tail(HEADING)            # the notes by hand, kept
+    if tail:
+        lines += ["", tail]
     write_section(HEADING, "\n".join(lines))
     print("\n".join(lines))
 
@@ -279,6 +283,8 @@ def previous_convergence() -> list[str]:
         return []
     end = text.find("\n## ", start + len(HEADING))
     section = text[start:end if end >= 0 else len(text)]
+    if BY_HAND in section:
+        section = section[:section.find(BY_HAND)]
     at = section.find("Convergence of the force curve")
     if at < 0:
         return []
