@@ -63,6 +63,7 @@ BEAM_TIE_SPEC = {"tie_node": ((), I8), "tie_seg": ((), I8), "tie_s": ((), F8),
 TIE_HISTORY = ("tie_kappa", "tie_D", "tie_energy")
 PIN_FACET_SPEC = {"quads": ((4,), I8), "t": ((), F8), "slack": ((), F8),
                   "hist_q": ((PIN_PATCHES,), I8), "hist": ((PIN_PATCHES, 3), F8)}   # pins vs shells
+_SPLIT, _V, _DT = object(), object(), object()   # placeholders: bundle_forces' per-call arguments
 
 
 @dataclass
@@ -506,26 +507,27 @@ class BundleSystem:
         if self._lane_args is None or self._lane_F is not F:
             self._lane_args, self._lane_F = self._lane_arguments(F), F
         args = self._lane_args
-        args[self._i_split] = self.beam_split.current()
-        args[self._i_split + 1] = v
-        args[self._i_split + 6] = dt
+        i_split, i_v, i_dt = self._lane_slots
+        args[i_split], args[i_v], args[i_dt] = self.beam_split.current(), v, dt
         return bundle_forces(*args)
 
     def _lane_arguments(self, F) -> list:
-        """The argument list of :func:`bundle_forces` (split, v and dt are set per call)."""
+        """The argument list of :func:`bundle_forces`, with placeholders for the split, the
+        velocities and the step (their places in :attr:`_lane_slots`)."""
         w, itf = self.wires, self.inp.interface
-        head = [w.X0, w.conn, w.R0, self.x, self.quat, w.xi_g, w.w_g, w.sec_y, w.sec_z,
-                w.sec_area, w.sec_GJ, w.sec_id, w.mats, *w.hist, w.f_el]
-        self._i_split = len(head)
-        return head + [
-            0, None, self.sconn, self.sthick, self.smat, self.sstate, 0.0, self.s_el,
-            HOURGLASS_COEF, self.seg, self.seg_r, self.seg_body, self.ww_pairs, self.k_ww,
-            self.k_ww, itf["mu_s"], itf["mu_k"], itf["d_c"], self.time_scale, self.ww_hist[0],
-            self.ww_hist[1], *self.facet_arrays, self.facet_pairs, self.facet_hist_p,
-            self.facet_hist_ft, self.facet_off, self.facet_prm, *self.quad_ties,
-            *self.beam_ties, self.K_coh, self.delta0, itf["delta_f"], itf["alpha_d"],
-            self.tie_order, *self.cylinders, F[0], F[1], F[2], F[5], F[3], F[4],
-            self.cyl_force]
+        args = [
+            w.X0, w.conn, w.R0, self.x, self.quat, w.xi_g, w.w_g, w.sec_y, w.sec_z, w.sec_area,
+            w.sec_GJ, w.sec_id, w.mats, *w.hist, w.f_el, _SPLIT, _V, self.sconn, self.sthick,
+            self.smat, self.sstate, _DT, self.s_el, HOURGLASS_COEF, self.seg, self.seg_r,
+            self.seg_body, self.ww_pairs, self.k_ww, self.k_ww, itf["mu_s"], itf["mu_k"],
+            itf["d_c"], self.time_scale, self.ww_hist[0], self.ww_hist[1], *self.facet_arrays,
+            self.facet_pairs, self.facet_hist_p, self.facet_hist_ft, self.facet_off,
+            self.facet_prm, *self.quad_ties, *self.beam_ties, self.K_coh, self.delta0,
+            itf["delta_f"], itf["alpha_d"], self.tie_order, *self.cylinders, F[0], F[1], F[2],
+            F[5], F[3], F[4], self.cyl_force]
+        self._lane_slots = tuple(next(i for i, a in enumerate(args) if a is slot)
+                                 for slot in (_SPLIT, _V, _DT))
+        return args
 
     def _stack_facet_sets(self):
         """The node-facet sets stacked for :func:`bundle_forces` (their histories become
