@@ -78,12 +78,11 @@ def family_costs(at: float = 0.4, calls: int = 100, repeat: int = 5) -> list[str
     dt, steps_per_search = res.dt, res.n_steps / s.searches
     v = np.random.default_rng(0).normal(scale=1e-2, size=s.mass.shape)   # slip and strain rates
     saved = save_histories(s)
-    F = s.F
-    work = [np.zeros_like(s.mass) for _ in range(4)]
-    W = np.zeros((2, F.shape[0]))
+    du, du_next, v_step, f = (np.zeros_like(s.mass) for _ in range(4))
+    W, W_end = np.zeros(len(s.families)), np.zeros(len(s.families))
     minv = np.where(s.mass > 0.0, 1.0 / np.maximum(s.mass, 1e-300), 0.0)
 
-    def per_call(fn, seconds=None):
+    def per_call(fn):
         means = []
         for _ in range(repeat):
             restore_histories(s, saved)
@@ -102,8 +101,7 @@ def family_costs(at: float = 0.4, calls: int = 100, repeat: int = 5) -> list[str
     lanes = per_call(lambda: s.forces(at * s.T, v, dt))      # the split keeps climbing
     search = per_call(s._search)
     row_cost = per_call(lambda: s.observe(at * s.T))
-    du, du_next, v_step, f = work
-    step = per_call(lambda: close_and_kick(F, du, du_next, W[0], W[1], v_step, minv, s.free,
+    step = per_call(lambda: close_and_kick(s.F, du, du_next, W, W_end, v_step, minv, s.free,
                                            0.5 * dt, s.mass, f, dt))
     restore_histories(s, saved)
     us = {k: f"{1e6 * t:.0f}" for k, t in family.items()}
@@ -112,8 +110,8 @@ def family_costs(at: float = 0.4, calls: int = 100, repeat: int = 5) -> list[str
             f"{calls} calls from the same state, us): each family's own parallel kernel, one "
             "after the other -- " + ", ".join(f"{k} {t}" for k, t in us.items())
             + f"; sum {1e6 * sum(family.values()):.0f}.  The system's forces() as a run "
-            f"calls it (the same families in two concurrent lanes): {1e6 * lanes:.0f}.  A contact search "
-            f"{1e6 * search:.0f} (one every {steps_per_search:.0f} steps so far).  The "
+            f"calls it (the same families in two concurrent lanes): {1e6 * lanes:.0f}.  A "
+            f"contact search {1e6 * search:.0f} (one every {steps_per_search:.0f} steps so far).  The "
             f"integrator's step (close_and_kick) {1e6 * step:.0f}.  A history row's "
             f"observations {1e6 * row_cost:.0f} (200 rows a run)."]
 
