@@ -6,7 +6,8 @@ folder, runs ``snakemake --cores N --config profile=P`` there with this interpre
 reads every job's start and end from Snakemake's log.  The Numba cache is the user's (set
 ``HARNESSPIPE_NUMBA_CACHE`` to an empty folder for a cold compile; the source files are in a
 new place either way, so Numba's index compiles them afresh).  Writes the total, the time
-per rule and the hi-fi runs per stage under "## Pipeline (<profile>)" in bench/RESULTS.md.
+per rule and the hi-fi runs per stage under "## Pipeline (<profile>)" in bench/RESULTS.md (keeping the section's notes
+by hand, "### By hand").
 """
 from __future__ import annotations
 
@@ -24,7 +25,7 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-from benchlib import write_section
+from benchlib import section_tail, write_section
 
 REPO = Path(__file__).resolve().parents[1]
 IGNORE = shutil.ignore_patterns("results", ".snakemake", ".venv", ".cache", "__pycache__", "*.egg-info",
@@ -128,6 +129,9 @@ def main() -> None:
         "|---|---|---|---|---|",
         *rows,
     ])
+    tail = section_tail(heading)            # the notes by hand, kept
+    if tail:
+        text += "\n\n" + tail
     write_section(heading, text)
     print(text)
 
