@@ -35,17 +35,21 @@ FIRST_RUN = (f"import sys, time; sys.path.insert(0, {str(Path(__file__).resolve(
              "print(time.perf_counter() - t)")
 
 
-def warm_up() -> None:
-    """Build the quick model and integrate its first 2 ms: every kernel compiled or loaded."""
+def quick_system():
+    """The case's quick model, ready to integrate, and its inputs."""
     from harnesspipe.config import load
-    from harnesspipe.fe.dynamics import integrate
     from harnesspipe.models import hifi, hifi_mesh
     from harnesspipe.stages.hifi import inputs
     cfg = load()
     cfg["profile"] = "quick"
     inp = inputs(cfg, CASE, {})
-    system = hifi.HifiSystem(hifi_mesh.build_mesh(inp.case, cfg, inp.resolution), inp)
-    integrate(system, 0.002)
+    return hifi.HifiSystem(hifi_mesh.build_mesh(inp.case, cfg, inp.resolution), inp), inp
+
+
+def warm_up() -> None:
+    """Build the quick model and integrate its first 2 ms: every kernel compiled or loaded."""
+    from harnesspipe.fe.dynamics import integrate
+    integrate(quick_system()[0], 0.002)
 
 
 def run(profile: str, overrides: dict | None = None):
@@ -64,16 +68,10 @@ def family_costs(at: float = 0.4, calls: int = 100, repeat: int = 5) -> list[str
     other (:mod:`harnesspipe.models.hifi_reference`), against the concurrent lanes that run
     them in a run; with the contact search and the integrator's step.  Each figure is the
     median over ``repeat`` rounds of the mean of ``calls`` calls from the same saved state."""
-    from harnesspipe.config import load
     from harnesspipe.fe.dynamics import DynamicsSettings, close_and_kick, integrate
-    from harnesspipe.models import hifi, hifi_mesh
     from harnesspipe.models.hifi_reference import (FAMILY_KERNELS, restore_histories,
                                                    save_histories, separate_forces)
-    from harnesspipe.stages.hifi import inputs
-    cfg = load()
-    cfg["profile"] = "quick"
-    inp = inputs(cfg, CASE, {})
-    s = hifi.HifiSystem(hifi_mesh.build_mesh(inp.case, cfg, inp.resolution), inp)
+    s, inp = quick_system()
     res = integrate(s, at * s.T, DynamicsSettings(safety=inp.explicit["safety"], n_output=2))
     dt, steps_per_search = res.dt, res.n_steps / s.searches
     v = np.random.default_rng(0).normal(scale=1e-2, size=s.mass.shape)   # slip and strain rates

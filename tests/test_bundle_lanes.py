@@ -59,7 +59,6 @@ def test_lanes_equal_the_separate_kernels_bit_for_bit_at_any_split(pressed_bundl
     restore_histories(s, start)
 
 
-
 class _FreshArguments(HifiSystem):
     """A system that builds bundle_forces' argument list anew at every call."""
 
@@ -84,6 +83,7 @@ def test_argument_list_kept_between_searches_gives_the_same_run():
     assert a.searches >= 3
     assert np.array_equal(a.x, b.x) and np.array_equal(a.quat, b.quat)
     assert ra.history.equals(rb.history)
+
 
 def test_split_climb_settles_at_the_balanced_split_despite_delays():
     """Lane 0 costs a + k, lane 1 costs b + (n - k): a call takes max(...), least at
