@@ -9,7 +9,7 @@ from harnesspipe.config import load
 from harnesspipe.fe.bundle_lanes import BeamSplit, check_disjoint, stack_groups
 from harnesspipe.fe.dynamics import DynamicsSettings, integrate
 from harnesspipe.models import hifi_mesh as hm
-from harnesspipe.models.hifi import HifiSystem
+from harnesspipe.models.hifi import QUAD_TIE_SPEC, HifiSystem
 from harnesspipe.models.hifi_reference import (history_arrays, restore_histories,
                                                save_histories, separate_forces)
 from harnesspipe.stages.hifi import inputs
@@ -134,17 +134,18 @@ def test_tie_groups_keep_their_order_across_kinds():
     def quad(n):
         return dict(kind="quad", tie_node=np.arange(n), tie_quad=np.zeros(n, int),
                     tie_xi=np.zeros((n, 2)), tie_sign=np.ones(n), tie_off=np.zeros((n, 3)),
-                    tie_area=np.ones(n), quads=np.zeros((2, 4), int), tie_kappa=np.zeros(n),
+                    tie_area=np.ones(n), tie_c=np.zeros(n), quads=np.zeros((2, 4), int),
+                    tie_kappa=np.zeros(n),
                     tie_D=np.zeros(n), tie_energy=np.zeros(n))
 
     beam = dict(kind="beam", tie_node=np.arange(2), tie_seg=np.zeros(2, int), tie_s=np.zeros(2),
                 tie_anchor=np.zeros(2, int), tie_arm=np.zeros((2, 3)), tie_axis=np.zeros((2, 3)),
-                tie_area=np.ones(2), tie_kappa=np.zeros(2), tie_D=np.zeros(2),
+                tie_area=np.ones(2), tie_c=np.zeros(2), tie_kappa=np.zeros(2), tie_D=np.zeros(2),
                 tie_energy=np.zeros(2))
     s = SimpleNamespace(ties=[quad(3), beam, quad(5)])
     HifiSystem._stack_ties(s)
     assert s.tie_order.tolist() == [[0, 0], [1, 0], [0, 1]]
     assert s.quad_ties[-1].tolist() == [[0, 0], [3, 2], [8, 4]]     # offsets: ties, quads
     assert s.beam_ties[-1].tolist() == [0, 2]
-    s.quad_ties[8][4] = 1.0                                          # tie_D of the tape's tie 1
+    s.quad_ties[list(QUAD_TIE_SPEC).index("tie_D")][4] = 1.0          # tie_D of the tape's tie 1
     assert s.ties[2]["tie_D"][1] == 1.0

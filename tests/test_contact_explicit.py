@@ -712,8 +712,8 @@ def _quad_tie(off=0.185, area=2.0):
 def _run_quad_tie(x, quads, tq):
     fc = _z(len(x))
     args = [tq[k] for k in ("tie_node", "tie_quad", "tie_xi", "tie_sign", "tie_off", "tie_area")]
-    nf = cohesive_ties_quad(x, *args, quads, K, D0, DF, ALPHA, tq["tie_kappa"], tq["tie_D"],
-                            tq["tie_energy"], fc)
+    nf = cohesive_ties_quad(x, np.zeros_like(x), *args, np.zeros(1), quads, K, D0, DF, ALPHA,
+                            tq["tie_kappa"], tq["tie_D"], tq["tie_energy"], fc)
     return nf, fc
 
 
@@ -836,9 +836,10 @@ def test_damaged_ties_are_conservative_when_closing_differs_from_opening():
         f = np.zeros((3, 6))
         hist[0][:] = 0.07
         hist[1][:] = 0.5
-        cohesive_ties_beam(x, np.tile(q, (3, 1)), np.array([2]), np.array([0]), np.array([0.4]),
-                           np.array([0]), np.array([[0.0, 0.75, 0.0]]), np.array([[1.0, 0.0, 0.0]]),
-                           np.array([2.0]), np.array([[0, 1]]), K, D0, DF, ALPHA, *hist, f)
+        cohesive_ties_beam(x, np.zeros_like(x), np.tile(q, (3, 1)), np.array([2]), np.array([0]),
+                           np.array([0.4]), np.array([0]), np.array([[0.0, 0.75, 0.0]]),
+                           np.array([[1.0, 0.0, 0.0]]), np.array([2.0]), np.zeros(1),
+                           np.array([[0, 1]]), K, D0, DF, ALPHA, *hist, f)
         return f, x, a, k
 
     W, scale = _loop_work(beam_forces)
@@ -921,3 +922,30 @@ def test_far_candidates_change_nothing():
             np.testing.assert_allclose(a[3], b[3], rtol=0, atol=1e-12)
         np.testing.assert_allclose(hf1[1], hf2[1], rtol=0, atol=1e-12)
         np.testing.assert_array_equal(hf1[0], hf2[0])
+
+
+@pytest.mark.parametrize("D", [0.0, 0.4, 1.0])
+def test_tie_dashpot_resists_the_relative_velocity_with_the_bond(D):
+    """At zero separation the tie carries only its dashpot: -(1 - D) c (v_node - v_target)
+    on the tied node, the reaction spread over the quad's nodes by the shape functions (no
+    net force), and negative power (it only dissipates); a debonded tie carries nothing."""
+    x, quads, tq = _quad_tie()
+    rng = np.random.default_rng(3)
+    v = np.zeros((len(x), 6))
+    v[:, :3] = rng.normal(size=(len(x), 3))
+    c = 0.02
+    tq["tie_D"][:] = D
+    tq["tie_kappa"][:] = 0.0 if D == 0.0 else 0.2
+    fc = _z(len(x))
+    args = [tq[k] for k in ("tie_node", "tie_quad", "tie_xi", "tie_sign", "tie_off", "tie_area")]
+    cohesive_ties_quad(x, v, *args, np.array([c]), quads, K, D0, DF, ALPHA, tq["tie_kappa"],
+                       tq["tie_D"], tq["tie_energy"], fc)
+    xi, eta = tq["tie_xi"][0]
+    N = 0.25 * np.array([(1 - xi) * (1 - eta), (1 + xi) * (1 - eta), (1 + xi) * (1 + eta),
+                         (1 - xi) * (1 + eta)])
+    v_rel = v[4, :3] - N @ v[quads[0], :3]
+    expected = -(1.0 - D) * c * v_rel
+    assert np.allclose(fc[4, :3], expected, rtol=1e-12, atol=1e-15)
+    assert np.allclose(fc[:, :3].sum(axis=0), 0.0, atol=1e-15)
+    power = float(np.sum(fc[:, :3] * v[:, :3]))
+    assert power == pytest.approx(-(1.0 - D) * c * v_rel @ v_rel, rel=1e-9, abs=1e-15)

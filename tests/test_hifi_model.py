@@ -192,7 +192,9 @@ def test_full_cwb_run_closes_the_energy_balance_and_creates_no_energy(cwb_run):
     assert W[-1] > 10.0                                   # N mm: the feeder did real work
     # largest balance error of the run within 1 % of the test's work (dynamics.integrate)
     assert np.max(np.abs(h["balance_error"])) < 0.01 * W[-1]
-    assert summary["energy_error"] == pytest.approx(np.max(np.abs(h["balance_error"])) / W[-1], rel=0.5)
+    # the summary's error is the largest over every step, the history samples 200 of them
+    row_max = np.max(np.abs(h["balance_error"])) / W[-1]
+    assert row_max * (1.0 - 1e-9) <= summary["energy_error"] < 0.01
     for family in ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive"):
         assert h[family].min() > -0.01 * W[-1], family     # no interaction is an energy source
     assert 0.0 < h["plastic"].iloc[-1] < h["internal"].iloc[-1]   # the wires yield (Table 1)
@@ -282,9 +284,9 @@ def test_beam_tie_carries_no_force_under_rigid_motion_and_its_moment_balances():
     def call(x, quat):
         f = np.zeros((3, 6))
         hist = [np.zeros(1), np.zeros(1), np.zeros(1)]
-        cohesive_ties_beam(x, quat, args["tie_node"], args["tie_seg"], args["tie_s"],
-                           args["tie_anchor"], args["tie_arm"], args["tie_axis"], args["tie_area"],
-                           seg, K, d0, 0.08, 2.0, *hist, f)
+        cohesive_ties_beam(x, np.zeros_like(x), quat, args["tie_node"], args["tie_seg"],
+                           args["tie_s"], args["tie_anchor"], args["tie_arm"], args["tie_axis"],
+                           args["tie_area"], np.zeros(1), seg, K, d0, 0.08, 2.0, *hist, f)
         return f
 
     theta = np.array([0.3, -0.5, 0.9])

@@ -57,9 +57,9 @@ def bundle_forces(
         hist_ft,                                                    # wire-wire contact
         fs_nodes, fs_r, fs_quads, fs_t, fs_sign, fs_pairs, fs_hist_p, fs_hist_ft, fs_off,
         fs_prm,                                                     # node-facet sets
-        qt_node, qt_quad, qt_xi, qt_sign, qt_offset, qt_area, qt_quads, qt_kappa, qt_D,
+        qt_node, qt_quad, qt_xi, qt_sign, qt_offset, qt_area, qt_c, qt_quads, qt_kappa, qt_D,
         qt_energy, qt_off,                                          # ties to quads
-        bt_node, bt_seg, bt_s, bt_anchor, bt_arm, bt_axis, bt_area, bt_kappa, bt_D,
+        bt_node, bt_seg, bt_s, bt_anchor, bt_arm, bt_axis, bt_area, bt_c, bt_kappa, bt_D,
         bt_energy, bt_off,                                          # ties to beams
         K, delta0, delta_f, alpha_d, tie_order,                     # cohesive law
         cyl_c, cyl_axis, cyl_R, cyl_v, chain_start, chain_mu, chain_k, chain_hist, pf_quads,
@@ -103,10 +103,10 @@ def bundle_forces(
         else:
             shell_element_forces_serial(x, v, sconn, sthick, smat, sstate, dt, s_el, hg)
             scatter_add(sconn, s_el, f_el, -1.0)
-            _ties(x, quat, seg, qt_node, qt_quad, qt_xi, qt_sign, qt_offset, qt_area, qt_quads,
-                  qt_kappa, qt_D, qt_energy, qt_off, bt_node, bt_seg, bt_s, bt_anchor, bt_arm,
-                  bt_axis, bt_area, bt_kappa, bt_D, bt_energy, bt_off, K, delta0, delta_f,
-                  alpha_d, tie_order, f_c)
+            _ties(x, v, quat, seg, qt_node, qt_quad, qt_xi, qt_sign, qt_offset, qt_area, qt_c,
+                  qt_quads, qt_kappa, qt_D, qt_energy, qt_off, bt_node, bt_seg, bt_s, bt_anchor,
+                  bt_arm, bt_axis, bt_area, bt_c, bt_kappa, bt_D, bt_energy, bt_off, K, delta0,
+                  delta_f, alpha_d, tie_order, f_c)
             n_act[1] = _cylinders(x, v, seg, seg_r, cyl_c, cyl_axis, cyl_R, cyl_v, chain_start,
                                   chain_mu, chain_k, chain_hist, pf_quads, pf_t, pf_slack,
                                   pf_hist_q, pf_hist, pf_off, pf_prm, dt, f_pn, f_pt, f_cyl)
@@ -134,26 +134,26 @@ def _facet_sets(x, v, nodes, r, quads, t, sign, pairs, hist_p, hist_ft, off, prm
 
 
 @njit(cache=True)
-def _ties(x, quat, seg, qt_node, qt_quad, qt_xi, qt_sign, qt_offset, qt_area, qt_quads,
-          qt_kappa, qt_D, qt_energy, qt_off, bt_node, bt_seg, bt_s, bt_anchor, bt_arm,
-          bt_axis, bt_area, bt_kappa, bt_D, bt_energy, bt_off, K, delta0, delta_f, alpha_d,
-          tie_order, f_c):
+def _ties(x, v, quat, seg, qt_node, qt_quad, qt_xi, qt_sign, qt_offset, qt_area, qt_c,
+          qt_quads, qt_kappa, qt_D, qt_energy, qt_off, bt_node, bt_seg, bt_s, bt_anchor, bt_arm,
+          bt_axis, bt_area, bt_c, bt_kappa, bt_D, bt_energy, bt_off, K, delta0, delta_f,
+          alpha_d, tie_order, f_c):
     """The tie groups of :func:`bundle_forces` in the order of ``tie_order``."""
     for r in range(tie_order.shape[0]):
         g = tie_order[r, 1]
         if tie_order[r, 0] == 0:
             a, b = qt_off[g, 0], qt_off[g + 1, 0]
             q0, q1 = qt_off[g, 1], qt_off[g + 1, 1]
-            cohesive_ties_quad_serial(x, qt_node[a:b], qt_quad[a:b], qt_xi[a:b], qt_sign[a:b],
-                                      qt_offset[a:b], qt_area[a:b], qt_quads[q0:q1], K, delta0,
-                                      delta_f, alpha_d, qt_kappa[a:b], qt_D[a:b],
-                                      qt_energy[a:b], f_c)
+            cohesive_ties_quad_serial(x, v, qt_node[a:b], qt_quad[a:b], qt_xi[a:b],
+                                      qt_sign[a:b], qt_offset[a:b], qt_area[a:b], qt_c[a:b],
+                                      qt_quads[q0:q1], K, delta0, delta_f, alpha_d,
+                                      qt_kappa[a:b], qt_D[a:b], qt_energy[a:b], f_c)
         else:
             a, b = bt_off[g], bt_off[g + 1]
-            cohesive_ties_beam(x, quat, bt_node[a:b], bt_seg[a:b], bt_s[a:b], bt_anchor[a:b],
-                               bt_arm[a:b], bt_axis[a:b], bt_area[a:b], seg, K, delta0,
-                               delta_f, alpha_d, bt_kappa[a:b], bt_D[a:b], bt_energy[a:b],
-                               f_c)
+            cohesive_ties_beam(x, v, quat, bt_node[a:b], bt_seg[a:b], bt_s[a:b],
+                               bt_anchor[a:b], bt_arm[a:b], bt_axis[a:b], bt_area[a:b],
+                               bt_c[a:b], seg, K, delta0, delta_f, alpha_d, bt_kappa[a:b],
+                               bt_D[a:b], bt_energy[a:b], f_c)
 
 
 @njit(cache=True)

@@ -12,7 +12,8 @@ Interactions of the 3-point bending model of a wire bundle (eqs. 6-10):
 (c) ``node_facet_contact``    nodes (wires) against shell quads (tube, tape), one-sided,
                               eq. 6 friction;
 (d) ``cohesive_ties_quad`` / ``cohesive_ties_beam``  tape bonded to the tube / the wires by
-                              the damaged cohesive law of eqs. 7-10 (fixed node-to-point ties);
+                              the damaged cohesive law of eqs. 7-10 (fixed node-to-point ties)
+                              with a dashpot beside each tie (:func:`_tie_dashpot`);
 (e) ``make_ties``             Python helper building the ties from the initial geometry.
 
 Conventions.  Units mm, N, s.  ``x`` (n_nodes, 3+) current positions, ``v``
@@ -1466,6 +1467,20 @@ def _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, p0, p
 
 # ------------------------------------------------------------------ (d) cohesive ties
 @njit(cache=True)
+def _tie_dashpot(c, v_node, v_target):
+    """Force of a tie's dashpot on the tied node, one component: ``-c (v_node - v_target)``.
+
+    The bond of a tape is a viscoelastic adhesive layer, not an ideal spring: without
+    damping, the light tape nodes on their stiff ties ring at the highest frequencies of
+    the mesh, where central differences misstate the energy by O((omega dt)^2) and where
+    the ringing, fed by the pins' friction, grows (issue 25).  The dashpot (``c`` a
+    fraction of the tie's critical damping, scaled by 1 - D so that it goes with the
+    bond) damps that ringing within a few periods and is negligible at the test's rates;
+    its power ``-c |v_node - v_target|^2`` is dissipation of the cohesive family."""
+    return -c * (v_node - v_target)
+
+
+@njit(cache=True)
 def _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
                   tie_area, tloc):
     """Eqs. 7-10 at one tie; updates kappa, D (never decreasing) and the dissipated energy.
@@ -1489,19 +1504,20 @@ def _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_en
 
 
 @njit(cache=True, parallel=True)
-def cohesive_ties_quad(x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, quads, K,
-                       delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, f_c):
+def cohesive_ties_quad(x, v, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, tie_c,
+                       quads, K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, f_c):
     """Cohesive ties (eqs. 7-10) of nodes to fixed material points of shell quads.
 
     Parameters
     ----------
-    x : (n_nodes, 3+) positions.
+    x, v : (n_nodes, 3+) positions, half-step velocities.
     tie_node : (n_tie,) the bonded (tape) node; tie_quad : (n_tie,) target quad;
     tie_xi : (n_tie, 2) bilinear coordinates (xi, eta) in [-1, 1]^2 of the target point;
     tie_sign : (n_tie,) +1 / -1 orienting the normal X_xi x X_eta towards the tied node;
     tie_off : (n_tie, 3) initial separation x_node - x_target in the local frame
         (n, s, t) (so that delta = 0 at the start);
     tie_area : (n_tie,) tributary area (mm^2).  (All from :func:`make_ties`.)
+    tie_c : (n_tie,) dashpot coefficient of the intact tie (N s/mm, :func:`_tie_dashpot`).
     quads : (n_q, 4) node ids; K (3,), delta0 (3,), delta_mf, alpha : eqs. 7-10.
     tie_kappa, tie_D : (n_tie,) history, in place (D never decreases);
     tie_energy : (n_tie,) dissipated energy (N mm) accumulated in place,
@@ -1516,33 +1532,39 @@ def cohesive_ties_quad(x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_are
     """
     n = tie_node.shape[0]
     pf = np.empty((n, 3))
+    pv = np.empty((n, 3))
     lever = np.empty((n, 3))
     n_chunks = (n + CHUNK - 1) // CHUNK
     for ch in prange(n_chunks):
-        _quad_ties_range(ch * CHUNK, min(n, (ch + 1) * CHUNK), x, tie_node, tie_quad, tie_xi,
-                         tie_sign, tie_off, tie_area, quads, K, delta0, delta_mf, alpha,
-                         tie_kappa, tie_D, tie_energy, pf, lever)
-    return _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, lever, f_c)
+        _quad_ties_range(ch * CHUNK, min(n, (ch + 1) * CHUNK), x, v, tie_node, tie_quad,
+                         tie_xi, tie_sign, tie_off, tie_area, tie_c, quads, K, delta0,
+                         delta_mf, alpha, tie_kappa, tie_D, tie_energy, pf, pv, lever)
+    return _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, pv, lever, f_c)
 
 
 @njit(cache=True)
-def cohesive_ties_quad_serial(x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, quads,
-                              K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, f_c):
+def cohesive_ties_quad_serial(x, v, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area,
+                              tie_c, quads, K, delta0, delta_mf, alpha, tie_kappa, tie_D,
+                              tie_energy, f_c):
     """Serial twin of :func:`cohesive_ties_quad` (for a caller that runs it beside other
     work); the same arithmetic, the same results."""
     n = tie_node.shape[0]
     pf = np.empty((n, 3))
+    pv = np.empty((n, 3))
     lever = np.empty((n, 3))
-    _quad_ties_range(0, n, x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, quads, K,
-                     delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, pf, lever)
-    return _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, lever, f_c)
+    _quad_ties_range(0, n, x, v, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, tie_c,
+                     quads, K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, pf, pv,
+                     lever)
+    return _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, pv, lever, f_c)
 
 
 @njit(cache=True)
-def _quad_ties_range(lo, hi, x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, quads,
-                     K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, pf, lever):
+def _quad_ties_range(lo, hi, x, v, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area,
+                     tie_c, quads, K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, pf,
+                     pv, lever):
     """Ties ``lo..hi-1``: separation, eqs. 7-10 (damage in place) and the traction's force
-    on the tied node into ``pf``, its lever about the target point into ``lever``."""
+    on the tied node into ``pf``, its lever about the target point into ``lever``, the
+    dashpot's force on the tied node into ``pv``."""
     scr = np.empty((5, 3))
     for j in range(lo, hi):
         q = tie_quad[j]
@@ -1574,12 +1596,22 @@ def _quad_ties_range(lo, hi, x, tie_node, tie_quad, tie_xi, tie_sign, tie_off, t
         pf[j, 0] = -A * (tloc[0] * n0 + tloc[1] * e1[0] + tloc[2] * t0)
         pf[j, 1] = -A * (tloc[0] * n1 + tloc[1] * e1[1] + tloc[2] * t1)
         pf[j, 2] = -A * (tloc[0] * n2 + tloc[1] * e1[2] + tloc[2] * t2)
+        c = (1.0 - tie_D[j]) * tie_c[j]
+        xi = tie_xi[j, 0]
+        eta = tie_xi[j, 1]
+        for k in range(3):
+            vt = (0.25 * (1 - xi) * (1 - eta) * v[quads[q, 0], k]
+                  + 0.25 * (1 + xi) * (1 - eta) * v[quads[q, 1], k]
+                  + 0.25 * (1 + xi) * (1 + eta) * v[quads[q, 2], k]
+                  + 0.25 * (1 - xi) * (1 + eta) * v[quads[q, 3], k])
+            pv[j, k] = _tie_dashpot(c, v[tie_node[j], k], vt)
 
 
 @njit(cache=True)
-def _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, lever, f_c):
-    """The serial end of the quad ties: forces to the tied nodes and the targets' nodes
-    (in tie order); returns the number of failed ties."""
+def _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, pv, lever, f_c):
+    """The serial end of the quad ties: forces of the traction (``pf``, with the frame's)
+    and of the dashpot (``pv``) to the tied nodes and the targets' nodes (in tie order);
+    returns the number of failed ties."""
     n = tie_node.shape[0]
     n_failed = 0
     for j in range(n):
@@ -1593,7 +1625,7 @@ def _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, lever, f_
         N2 = 0.25 * (1 + xi) * (1 + eta)
         N3 = 0.25 * (1 - xi) * (1 + eta)
         for c in range(3):
-            f = pf[j, c]
+            f = pf[j, c] + pv[j, c]
             f_c[tie_node[j], c] += f
             f_c[quads[q, 0], c] -= N0 * f
             f_c[quads[q, 1], c] -= N1 * f
@@ -1666,9 +1698,9 @@ def _frame_forces(x, quads, q, xi, eta, L, p_node, f_c):
 
 
 @njit(cache=True)
-def cohesive_ties_beam(x, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm, tie_axis,
-                       tie_area, seg, K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy,
-                       f_c):
+def cohesive_ties_beam(x, v, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm, tie_axis,
+                       tie_area, tie_c, seg, K, delta0, delta_mf, alpha, tie_kappa, tie_D,
+                       tie_energy, f_c):
     """Cohesive ties (eqs. 7-10) of nodes to material points of beams with rotational dofs.
 
     The target of tie j is ``P + R_a r0`` with ``P = (1 - s) x_0 + s x_1`` on segment
@@ -1681,7 +1713,9 @@ def cohesive_ties_beam(x, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm, t
     the derivative of the tie's energy with respect to the anchor rotation, which turns
     both the arm and the frame: the tie is conservative with the beam's own rotations,
     also once damage treats opening and closing apart (a tie to the segment's translations
-    alone is not, once the arm is finite and the wire turns).
+    alone is not, once the arm is finite and the wire turns).  The dashpot of
+    :func:`_tie_dashpot` (``tie_c``, velocities ``v``) acts on the velocity of the node
+    relative to ``P``'s (it only dissipates; it turns no frame).
     Returns the number of fully debonded ties.
     """
     n = tie_node.shape[0]
@@ -1720,12 +1754,14 @@ def cohesive_ties_beam(x, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm, t
         if tie_D[j] >= 1.0:
             failed += 1
         A = tie_area[j]
+        cd = (1.0 - tie_D[j]) * tie_c[j]
         for c in range(3):
             arm[c] += p[c]          # lever x_node - P: the arm and the separation
             p[c] = -A * (tloc[0] * nv[c] + tloc[1] * ax[c] + tloc[2] * tv[c])
-            f_c[tie_node[j], c] += p[c]
-            f_c[a0, c] -= (1.0 - s) * p[c]
-            f_c[a1, c] -= s * p[c]
+            fv = _tie_dashpot(cd, v[tie_node[j], c], (1.0 - s) * v[a0, c] + s * v[a1, c])
+            f_c[tie_node[j], c] += p[c] + fv
+            f_c[a0, c] -= (1.0 - s) * (p[c] + fv)
+            f_c[a1, c] -= s * (p[c] + fv)
         # moment of -p about the anchor's spins: (x_node - P) x (-p); the part arm x (-p)
         # from the turning target, the part delta x (-p) from the turning frame (zero when the
         # traction is parallel to delta, not once damage treats opening and closing apart)

@@ -54,12 +54,12 @@ FACET_SPEC = {"nodes": ((), I8), "r": ((), F8), "quads": ((4,), I8), "t": ((), F
               "hist_ft": ((ce.DEFAULT_MAXS, 3), F8)}          # stacked node-facet sets
 QUAD_TIE_SPEC = {"tie_node": ((), I8), "tie_quad": ((), I8), "tie_xi": ((2,), F8),
                  "tie_sign": ((), F8), "tie_off": ((3,), F8), "tie_area": ((), F8),
-                 "quads": ((4,), I8), "tie_kappa": ((), F8), "tie_D": ((), F8),
+                 "tie_c": ((), F8), "quads": ((4,), I8), "tie_kappa": ((), F8), "tie_D": ((), F8),
                  "tie_energy": ((), F8)}                       # stacked ties to quads
 BEAM_TIE_SPEC = {"tie_node": ((), I8), "tie_seg": ((), I8), "tie_s": ((), F8),
                  "tie_anchor": ((), I8), "tie_arm": ((3,), F8), "tie_axis": ((3,), F8),
-                 "tie_area": ((), F8), "tie_kappa": ((), F8), "tie_D": ((), F8),
-                 "tie_energy": ((), F8)}                       # stacked ties to beams
+                 "tie_area": ((), F8), "tie_c": ((), F8), "tie_kappa": ((), F8),
+                 "tie_D": ((), F8), "tie_energy": ((), F8)}    # stacked ties to beams
 TIE_HISTORY = ("tie_kappa", "tie_D", "tie_energy")
 PIN_FACET_SPEC = {"quads": ((4,), I8), "t": ((), F8), "slack": ((), F8),
                   "hist_q": ((PIN_PATCHES,), I8), "hist": ((PIN_PATCHES, 3), F8)}   # pins vs shells
@@ -161,6 +161,7 @@ class BundleSystem:
         self.ww_skip = None         # (n_beam,) bool: segments kept out of wire-wire contact
         self._setup_ties()
         self.shell_mass_scale = self._scale_to_wire_step()
+        self._set_tie_damping()
         self.dt0 = 2.0 / np.sqrt(self.node_omega2().max())
         self._setup_contacts()
         self.phase = {k: 0.0 for k in (LANES_PHASE, "contact search", "strand and damping")}
@@ -358,6 +359,30 @@ class BundleSystem:
         if not itf["delta_f"] > itf["delta0"]:
             raise ValueError(f"cohesive: delta_f = {itf['delta_f']} must exceed delta0 = {itf['delta0']}")
 
+    def _tie_targets(self, ties):
+        """The target nodes (n, k) of a tie group and their weights (n, k): the quad's
+        bilinear shape functions at the tie point, or the segment's linear ones."""
+        if ties["kind"] == "quad":
+            xi, eta = ties["tie_xi"][:, 0], ties["tie_xi"][:, 1]
+            N = 0.25 * np.stack([(1 - xi) * (1 - eta), (1 + xi) * (1 - eta),
+                                 (1 + xi) * (1 + eta), (1 - xi) * (1 + eta)], axis=1)
+            return ties["quads"][ties["tie_quad"]], N
+        s_ = ties["tie_s"]
+        return self.seg[ties["tie_seg"]], np.stack([1.0 - s_, s_], axis=1)
+
+    def _set_tie_damping(self):
+        """Dashpot coefficient of every tie, ``c = 2 zeta sqrt(k m_red)`` (``zeta`` the
+        config's ``tie_damping``): ``k = max(K) A`` the tie's stiffness, ``m_red`` the
+        reduced mass of the tied node and its target point (the target nodes' masses
+        weighted by their shape functions), at the scaled masses of the run."""
+        zeta = float(self.inp.explicit["tie_damping"])
+        m = self.mass[:, 0]
+        for ties in self.ties:
+            targets, N = self._tie_targets(ties)
+            m1, m2 = m[ties["tie_node"]], np.sum(m[targets] * N, axis=1)
+            k = np.max(self.K_coh) * ties["tie_area"]
+            ties["tie_c"] = 2.0 * zeta * np.sqrt(k * m1 * m2 / (m1 + m2))
+
     def tie_step(self) -> float:
         """Critical step of the stiffest cohesive tie: 2 sqrt(m_red / (K A)), with the reduced
         mass of the tied node and the mean mass of its target's nodes."""
@@ -411,15 +436,7 @@ class BundleSystem:
         w2 += self._tie_omega2(m)
         for ties in self.ties:       # the springs' rows at their targets' nodes
             k = 2.0 * np.max(self.K_coh) * ties["tie_area"]
-            if ties["kind"] == "quad":
-                xi, eta = ties["tie_xi"][:, 0], ties["tie_xi"][:, 1]
-                N = 0.25 * np.stack([(1 - xi) * (1 - eta), (1 + xi) * (1 - eta),
-                                     (1 + xi) * (1 + eta), (1 - xi) * (1 + eta)], axis=1)
-                targets = ties["quads"][ties["tie_quad"]]
-            else:
-                s_ = ties["tie_s"]
-                N = np.stack([1.0 - s_, s_], axis=1)
-                targets = self.seg[ties["tie_seg"]]
+            targets, N = self._tie_targets(ties)
             np.add.at(w2, targets.ravel(), (k[:, None] * N).ravel() / m[targets.ravel()])
         return w2
 
@@ -561,7 +578,8 @@ class BundleSystem:
             group.append(t)
         qa, qo = stack_groups(quad, QUAD_TIE_SPEC, shared=TIE_HISTORY)
         ba, bo = stack_groups(beam, BEAM_TIE_SPEC, shared=TIE_HISTORY)
-        self.quad_ties = (*qa, np.ascontiguousarray(np.stack([qo[0], qo[6]], axis=1)))
+        i_quads = list(QUAD_TIE_SPEC).index("quads")
+        self.quad_ties = (*qa, np.ascontiguousarray(np.stack([qo[0], qo[i_quads]], axis=1)))
         self.beam_ties = (*ba, bo[0])
         self.tie_order = np.array(order, dtype=np.int64).reshape(-1, 2)
 

@@ -60,7 +60,7 @@ def separate_forces(s, v, dt, seconds: dict | None = None):
                                    s.time_scale, fs["pen_max"], fs["hist"][0], fs["hist"][1],
                                    F[1], F[2])
     clock.lap("node-facet contact")
-    _ties(s, itf, F[5])
+    _ties(s, itf, v, F[5])
     clock.lap("cohesive ties")
     n += _pins(s, v, dt, F)
     clock.lap("pins")
@@ -78,18 +78,18 @@ class _Clock:
             self.t = t
 
 
-def _ties(s, itf, f):
+def _ties(s, itf, v, f):
     for t in s.ties:
         if t["kind"] == "quad":
-            ce.cohesive_ties_quad(s.x, t["tie_node"], t["tie_quad"], t["tie_xi"], t["tie_sign"],
-                                  t["tie_off"], t["tie_area"], t["quads"], s.K_coh, s.delta0,
-                                  itf["delta_f"], itf["alpha_d"], t["tie_kappa"], t["tie_D"],
-                                  t["tie_energy"], f)
-        else:
-            ce.cohesive_ties_beam(s.x, s.quat, t["tie_node"], t["tie_seg"], t["tie_s"],
-                                  t["tie_anchor"], t["tie_arm"], t["tie_axis"], t["tie_area"],
-                                  s.seg, s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"],
+            ce.cohesive_ties_quad(s.x, v, t["tie_node"], t["tie_quad"], t["tie_xi"],
+                                  t["tie_sign"], t["tie_off"], t["tie_area"], t["tie_c"],
+                                  t["quads"], s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"],
                                   t["tie_kappa"], t["tie_D"], t["tie_energy"], f)
+        else:
+            ce.cohesive_ties_beam(s.x, v, s.quat, t["tie_node"], t["tie_seg"], t["tie_s"],
+                                  t["tie_anchor"], t["tie_arm"], t["tie_axis"], t["tie_area"],
+                                  t["tie_c"], s.seg, s.K_coh, s.delta0, itf["delta_f"],
+                                  itf["alpha_d"], t["tie_kappa"], t["tie_D"], t["tie_energy"], f)
 
 
 def _pins(s, v, dt, F) -> int:

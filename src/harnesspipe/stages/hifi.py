@@ -19,7 +19,7 @@ from harnesspipe.config import ConfigError
 INTERFACE_KEYS = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1", "mu_s",
                   "mu_k", "d_c", "K_nn", "K_ss", "K_tt")
 EXPLICIT_KEYS = ("t_total", "f_m", "safety", "mass_damping", "penalty", "penalty_layers",
-                "search_margin", "stop_deflection")
+                 "search_margin", "tie_damping", "stop_deflection")
 COVERINGS = ("closed_tube", "open_tube", "fabric_tube")
 
 
