@@ -647,7 +647,11 @@ class HifiSystem(BundleSystem):
 
     def _wire_pin_contact(self, m) -> dict:
         """The wires against the pins as chains (:func:`ce.chain_cylinder_contact`): the
-        segments of each wire run consecutively along it in ``seg``."""
+        segments of each wire run consecutively along it in ``seg``.  A bare wire on a pin
+        is PVC insulation on steel, the pair of the roller-tape coefficient ``mu_rtp``
+        (assumption: the paper names none; its wires meet the pins only through a tube,
+        tape or fabric -- where a wire does reach a pin, in a TWB between the tape's wraps,
+        the roller-tube ``mu_rtb`` of a polypropylene tube has no bearing)."""
         body = self.seg_body
         if np.any(np.diff(body) < 0) or np.any(self.seg[1:, 0][body[1:] == body[:-1]]
                                                 != self.seg[:-1, 1][body[1:] == body[:-1]]):
@@ -656,7 +660,7 @@ class HifiSystem(BundleSystem):
             raise ValueError("hi-fi mesh: wires must not share nodes (the pin contact moves "
                              "the wires' nodes in parallel, wire by wire)")
         start = np.searchsorted(body, np.arange(self.mesh.n_wires + 1)).astype(np.int64)
-        return dict(start=start, mu=float(self.inp.interface["mu_rtb"]),
+        return dict(start=start, mu=float(self.inp.interface["mu_rtp"]),
                     k=self._penalty(m[:self.nw]), hist=np.zeros((self.mesh.n_wires, 3, 3)))
 
     def _move_loading(self, t):
