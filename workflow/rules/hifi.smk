@@ -86,8 +86,7 @@ def hifi_fit_settings(step):
     s = HIFI_STEPS[step]
     bounded = s["method"] == "bounded"
     fabric = any(hifi_fabric(c) for c in s["cases"])
-    start = {k: v for k, v in config["hifi"]["parameters"].items()
-             if (k != "E2_over_E1" or fabric) and (k not in s["names"] or not bounded)}
+    start = {k: v for k, v in config["hifi"]["parameters"].items() if k != "E2_over_E1" or fabric}
     return json.dumps({
         "names": s["names"], "cases": s["cases"], "window": HIFI[s["window"]], "method": s["method"],
         "bounds": HIFI[s["bounds"]] if bounded else None,

@@ -24,8 +24,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from harnesspipe.calibrate.objective import l2_error, on_grid
-from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, best_logged, check_stop,
-                                          logged_call, nelder_mead)
+from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, check_stop,
+                                          logged_call, nelder_mead, stopped_at)
 
 REJECT_FACTOR = 10.0
 #: a simulated curve may end this fraction of the window's end short of it (the feeder stops
@@ -168,9 +168,9 @@ def read_rejected(path: Path, key: str | None = None) -> list[dict]:
 
 
 def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, key="",
-                maxfev: int = 30, stop=None) -> FitResult:
+                maxfev: int = 30, stop=None, keep: float | None = None) -> FitResult:
     """Brent's bounded search for one parameter, every evaluation logged (and replayed).
-    ``stop``: as in :func:`harnesspipe.calibrate.simplex.nelder_mead`."""
+    ``stop``, ``keep``: as in :func:`harnesspipe.calibrate.simplex.nelder_mead`."""
     log = EvaluationLog(log_path, [name], key)
 
     def wrapped(c):
@@ -183,17 +183,20 @@ def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, ke
                               options={"xatol": xatol, "maxiter": maxfev})
         x, fun, converged, message = [res.x], float(res.fun), bool(res.success), str(res.message)
     except StopSearch as reason:
-        (x, fun), converged, message = best_logged(log), False, str(reason)
+        x, fun, kept = stopped_at(log, objective, None if keep is None else [keep])
+        converged, message = False, f"{reason}; {kept}"
     return FitResult(names=[name], x=np.array(x, dtype=float), fun=fun, nfev=len(log.rows),
                      converged=converged, message=message, trace=log.frame())
 
 
 def simplex_fit(objective, x0: dict, *, xatol: float, fatol: float, maxfev: int, log_path=None,
-                key="", stop=None) -> FitResult:
-    """The paper's Nelder-Mead (+5 % simplex) on several parameters."""
+                key="", stop=None, keep_start: bool = False) -> FitResult:
+    """The paper's Nelder-Mead (+5 % simplex) on several parameters; ``keep_start``: a
+    search its ``stop`` rule ends rests at ``x0``."""
     names = list(x0)
-    return nelder_mead(objective, np.array([x0[k] for k in names]), names, xatol=xatol,
-                       fatol=fatol, maxfev=maxfev, log_path=log_path, key=key, stop=stop)
+    start = np.array([x0[k] for k in names])
+    return nelder_mead(objective, start, names, xatol=xatol, fatol=fatol, maxfev=maxfev,
+                       log_path=log_path, key=key, stop=stop, keep=start if keep_start else None)
 
 
 def flat_screen(n_first: int, floor: float, penalty: float = np.inf):
@@ -220,5 +223,5 @@ def flat_screen(n_first: int, floor: float, penalty: float = np.inf):
             return None
         return (f"not identifiable from this data: the errors of the first {n_first} evaluations "
                 f"differ by {spread:.3g} N, less than the standard error of the measured mean "
-                f"({floor:.3g} N, l2 over the window); the best of them is kept")
+                f"({floor:.3g} N, l2 over the window)")
     return stop

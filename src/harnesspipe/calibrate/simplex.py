@@ -123,6 +123,21 @@ def best_logged(log: EvaluationLog) -> tuple[np.ndarray, float]:
     return log.rows[i][0], float(errors[i])
 
 
+def stopped_at(log: EvaluationLog, objective, keep) -> tuple[np.ndarray, float, str]:
+    """Where a search that its stop rule ended rests: at ``keep`` when given (its error
+    from the log if it was evaluated, else evaluated and logged), else at the best logged
+    point; with the words for the message.  A search stopped because the data cannot tell
+    its points apart keeps a given start value: which of the points came out best would
+    hinge on the last bits of the runs."""
+    if keep is None:
+        return (*best_logged(log), "the best of them is kept")
+    keep = np.asarray(keep, dtype=float)
+    for x, err, _ in log.rows:
+        if np.array_equal(x, keep):
+            return keep, err, "the start value is kept"
+    return keep, logged_call(log, objective, keep), "the start value is kept"
+
+
 def logged_call(log: EvaluationLog, objective, x: np.ndarray) -> float:
     """objective(x), replayed from the log when it holds the same point next, and logged."""
     hit = log.lookup(x)
@@ -147,7 +162,7 @@ def evaluate_logged(objective, x0, names, *, log_path=None, key="") -> FitResult
 
 def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
                 log_path=None, key="", restarts=0, start_scaling=None,
-                step=SIMPLEX_STEP, stop=None) -> FitResult:
+                step=SIMPLEX_STEP, stop=None, keep=None) -> FitResult:
     """Minimise ``objective(x) -> float`` by Nelder-Mead from the paper's simplex.
 
     ``xatol`` is relative to ``x0`` (the search runs on x / x0, so parameters of
@@ -163,7 +178,7 @@ def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
     evaluations are logged like all others).
     ``stop(rows) -> reason | None``, asked after every evaluation with the logged rows
     (parameters, error, wall time): a reason ends the search at once, at the best point
-    so far, with the reason as its message.
+    so far (or at ``keep``, see :func:`stopped_at`), with the reason as its message.
     ``key`` identifies the objective (e.g. a hash of its data and settings): a log
     written under another key is discarded instead of replayed.
     """
@@ -196,7 +211,7 @@ def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
             if improved <= fatol:
                 break
     except StopSearch as reason:
-        x_best, best = best_logged(log)
-        z, converged, message = x_best / scale, False, str(reason)
+        x_best, best, kept = stopped_at(log, objective, keep)
+        z, converged, message = x_best / scale, False, f"{reason}; {kept}"
     return FitResult(names=list(names), x=z * scale, fun=best, nfev=len(log.rows),
                      converged=converged, message=message, trace=log.frame())

@@ -209,8 +209,8 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
         prior = read_fit(p)
         fixed.update(prior["parameters"])
         prior_ids.append({"step": prior["item"], "parameters": prior["parameters"]})
-    missing = [k for k in names if k not in fixed] if settings["method"] == "simplex" else []
-    if missing:
+    missing = [k for k in names if k not in fixed]
+    if missing:   # the simplex starts there; a search the data cannot steer keeps it
         raise ConfigError(f"hifi fit {step}: no start value for {missing}")
     refs = {c: read_prepared(references[c]) for c in cases}
     window = tuple(float(w) for w in settings["window"])
@@ -332,7 +332,8 @@ def _mean_uncertainty(refs: dict, window) -> float:
 
 def _search(step, settings, objective, names, fixed, live, key, floor):
     """The bounded search (one parameter) or Nelder-Mead (several) of a fit step, with the
-    identifiability screen :func:`hcal.flat_screen` at ``floor`` x ``flat_factor``."""
+    identifiability screen :func:`hcal.flat_screen` at ``floor`` x ``flat_factor``; a search
+    the screen ends keeps the start values (``fixed``), whatever its first points gave."""
     log = live / "evaluations.h5"
     floor = floor * float(settings.get("flat_factor", 0.0))
     if settings["method"] == "bounded":
@@ -340,11 +341,13 @@ def _search(step, settings, objective, names, fixed, live, key, floor):
             raise ConfigError(f"hifi fit {step}: a bounded search fits one parameter, not {names}")
         return hcal.bounded_fit(objective, names[0], settings["bounds"], xatol=settings["xatol"],
                                 log_path=log, key=key, maxfev=settings["maxfev"],
-                                stop=hcal.flat_screen(2, floor, objective.penalty))
+                                stop=hcal.flat_screen(2, floor, objective.penalty),
+                                keep=float(fixed[names[0]]))
     if settings["method"] == "simplex":
         return hcal.simplex_fit(objective, {k: fixed[k] for k in names}, xatol=settings["xatol"],
                                 fatol=settings["fatol"], maxfev=settings["maxfev"], log_path=log, key=key,
-                                stop=hcal.flat_screen(len(names) + 1, floor, objective.penalty))
+                                stop=hcal.flat_screen(len(names) + 1, floor, objective.penalty),
+                                keep_start=True)
     raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex")
 
 
