@@ -82,7 +82,8 @@ class ExplicitError(RuntimeError):
         super().__init__(
             f"explicit run stopped: {reason} at step {step}, t = {time:.6g} s (dt = {dt:.4g} s); "
             f"KE = {ke:.6g}, IE = {ie:.6g}, W_ext = {w_ext:.6g}, "
-            f"balance error = {abs(ke + ie - w_ext):.6g} (N mm)")
+            f"W_ext - KE - IE = {w_ext - ke - ie:.6g} (N mm: dissipated or held by contacts "
+            f"and ties)")
 
 
 def smooth_step(x: float):
