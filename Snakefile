@@ -12,7 +12,7 @@ min_version("9.0")
 configfile: "config/config.yaml"
 
 from harnesspipe import config as hp_config
-from harnesspipe.provenance import source_hash
+from harnesspipe.provenance import code_hash, source_hash
 
 hp_config.validate(config, source="config/config.yaml (with --config overrides)")
 

@@ -15,9 +15,7 @@ BRANCH_HIFI_FITS = ({c: f"{RES}/hifi/virtual/{c}/rom/fit.json" for c in sorted(c
                     if config["branch"]["properties_source"] == "hifi" else {})
 BRANCH_PROPS = " ".join(f"{c}={p}" for c, p in BRANCH_HIFI_FITS.items())
 
-BRANCH_CODE = source_hash("fe", "models/branch.py", "models/rom_beam.py", "calibrate/branch.py",
-                          "calibrate/simplex.py", "calibrate/objective.py", "stages/branch.py",
-                          "stages/common.py")
+BRANCH_CODE = code_hash("harnesspipe.stages.branch", "commands/stage.py")
 
 
 rule branch_fit:
@@ -102,10 +100,7 @@ if {"inplane", "outofplane"} <= set(BRANCH_TESTS):
 # The hi-fi Y harness beside the ROM (Fig. 18a): one explicit run of the mesoscale model with the
 # tensile stage's coverings and the paper's interface values (config branch.hifi).
 BRANCH_HIFI = config["branch"]["hifi"]
-BRANCH_HIFI_CODE = source_hash("fe", "models/hifi.py", "models/hifi_mesh.py", "models/hifi_parts.py",
-                               "models/hifi_branch.py", "models/branch.py", "models/tube_equivalent.py",
-                               "models/tensile.py", "stages/hifi.py", "stages/hifi_chain.py",
-                               "stages/branch_hifi.py", "stages/common.py", "config.py")
+BRANCH_HIFI_CODE = code_hash("harnesspipe.stages.branch_hifi", "commands/stage.py")
 
 
 def branch_hifi_settings():

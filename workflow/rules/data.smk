@@ -11,7 +11,7 @@ rule check_data:
     log:
         f"{RES}/logs/check_data.log",
     params:
-        code=source_hash("data", "stages/data.py"),
+        code=code_hash("harnesspipe.stages.data", "commands/data.py"),
     shell:
         "{HP} check-data {DATA} > {output} 2> {log} || (cat {log} >&2; rm -f {output}; exit 1)"
 
@@ -26,7 +26,7 @@ rule prepare_test:
         f"{RES}/logs/prepare_{{test}}.log",
     params:
         entry=lambda wc: json.dumps(TESTS[wc.test], sort_keys=True),
-        code=source_hash("data", "stages/data.py"),
+        code=code_hash("harnesspipe.stages.data", "commands/data.py"),
     wildcard_constraints:
         test="[a-z0-9_]+",
     shell:

@@ -161,16 +161,7 @@ def hifi_role(case):
     return "calibration" if case in HIFI_CALIBRATED else "prediction"
 
 
-HIFI_CODE = source_hash("fe", "models/hifi.py", "models/hifi_mesh.py", "models/hifi_parts.py",
-                        "models/tube_equivalent.py", "models/tensile.py", "stages/hifi.py",
-                        "stages/hifi_chain.py", "stages/common.py", "config.py")
-HIFI_FIT_CODE = source_hash("fe", "models/hifi.py", "models/hifi_mesh.py", "models/hifi_parts.py",
-                            "models/tube_equivalent.py", "models/tensile.py", "stages/hifi.py",
-                            "stages/hifi_chain.py", "stages/common.py", "stages/data.py", "config.py",
-                            "calibrate/hifi.py", "calibrate/simplex.py", "calibrate/objective.py")
-HIFI_ROM_CODE = source_hash("fe", "models/rom_beam.py", "rom.py", "calibrate/rom.py", "calibrate/eq13.py",
-                            "calibrate/simplex.py", "calibrate/objective.py", "calibrate/hifi.py",
-                            "stages/hifi_chain.py", "stages/common.py")
+HIFI_CODE = code_hash("harnesspipe.stages.hifi_chain", "commands/stage.py")
 
 
 rule hifi_crosscheck:
@@ -209,7 +200,7 @@ rule hifi_crosscheck_rom:
         f"{RES}/logs/hifi_crosscheck_rom_{{case}}.log",
     params:
         settings=lambda wc: hifi_rom_settings(wc.case),
-        code=HIFI_ROM_CODE,
+        code=HIFI_CODE,
     wildcard_constraints:
         case="|".join(HIFI_CROSSCHECK) or "none^",
     threads: 1
@@ -227,7 +218,7 @@ rule hifi_crosscheck_table:
     log:
         f"{RES}/logs/hifi_crosscheck_table.log",
     params:
-        code=source_hash("stages/rom.py"),
+        code=code_hash("harnesspipe.stages.rom", "commands/stage.py"),
     shell:
         "{HP} stage table3 --fits {input} --out {output} > {log} 2>&1"
 
@@ -248,7 +239,7 @@ rule hifi_fit:
     params:
         settings=lambda wc: hifi_fit_settings(wc.step),
         refs=lambda wc: " ".join(f"{c}={hifi_prepared(c)}" for c in HIFI_STEPS[wc.step]["cases"]),
-        code=HIFI_FIT_CODE,
+        code=HIFI_CODE,
     wildcard_constraints:
         step="|".join(HIFI_STEPS),
     threads: lambda wc: HIFI_STEPS[wc.step]["cores"]     # see HIFI_STEPS
@@ -268,7 +259,7 @@ rule hifi_interface:
     log:
         f"{RES}/logs/hifi_interface.log",
     params:
-        code=source_hash("stages/hifi_chain.py"),
+        code=HIFI_CODE,
     shell:
         "{HP} stage hifi-interface --fits {input} --out {output} > {log} 2>&1"
 
@@ -314,7 +305,7 @@ rule hifi_virtual_rom:
         f"{RES}/logs/hifi_virtual_rom_{{case}}.log",
     params:
         settings=lambda wc: hifi_rom_settings(wc.case),
-        code=HIFI_ROM_CODE,
+        code=HIFI_CODE,
     wildcard_constraints:
         case="|".join(sorted(HIFI_CASES)),
     threads: 1

@@ -33,7 +33,7 @@ rule report:
         f"{RES}/logs/report.log",
     params:
         fits=report_fits(),
-        code=source_hash("report", "stages/common.py"),
+        code=code_hash("harnesspipe.report.html", "commands/report.py"),
     shell:
         "{HP} report --config {input.config} --results {RES} --check {input.check} "
         "--prepared {input.prepared} --fits {params.fits} --out {output} > {log} 2>&1"

@@ -45,10 +45,7 @@ rule rom_fit:
         f"{RES}/logs/rom_fit_{{case}}.log",
     params:
         settings=lambda wc: rom_settings(wc.case),
-        code=source_hash("fe", "models/rom_beam.py", "rom.py", "calibrate/rom.py", "calibrate/eq13.py",
-                         "calibrate/simplex.py", "calibrate/objective.py", "calibrate/uncertainty.py",
-                         "stages/rom.py", "stages/common.py", "stages/data.py",
-                         *(["stages/hifi_chain.py"] if config["rom"]["reference"] == "hifi" else [])),
+        code=code_hash("harnesspipe.stages.rom", "commands/stage.py"),
     threads: 1
     priority: 1
     shell:
@@ -65,7 +62,7 @@ rule table3:
     log:
         f"{RES}/logs/table3.log",
     params:
-        code=source_hash("stages/rom.py"),
+        code=code_hash("harnesspipe.stages.rom", "commands/stage.py"),
     shell:
         "{HP} stage table3 --fits {input} --out {output} > {log} 2>&1"
 

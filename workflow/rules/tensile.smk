@@ -32,9 +32,7 @@ rule tensile_fit:
         f"{RES}/logs/tensile_fit_{{component}}.log",
     params:
         settings=lambda wc: tensile_settings(wc.component),
-        code=source_hash("fe", "models/tensile.py", "calibrate/tensile.py", "calibrate/hardening.py",
-                         "calibrate/simplex.py", "calibrate/objective.py", "calibrate/uncertainty.py",
-                         "stages/tensile.py", "stages/common.py", "stages/data.py"),
+        code=code_hash("harnesspipe.stages.tensile", "commands/stage.py"),
     wildcard_constraints:
         component="closed_tube|open_tube|fabric_tube",
     threads: 1
@@ -53,7 +51,7 @@ rule table2:
     log:
         f"{RES}/logs/table2.log",
     params:
-        code=source_hash("stages/tensile.py"),
+        code=code_hash("harnesspipe.stages.tensile", "commands/stage.py"),
     shell:
         "{HP} stage table2 --fits {input} --out {output} > {log} 2>&1"
 
