@@ -191,12 +191,3 @@ def load_all(data_dir: Path, n_grid: int = 101) -> dict[str, TestSet]:
     if problems:
         raise DataError(problems)
     return tests
-
-
-def find_test(manifest: dict, kind: str, item: str, load_case: str | None = None) -> str:
-    """Id of the test of ``kind`` on ``item`` (and load case), or a DataError."""
-    for test_id, e in manifest["tests"].items():
-        if e["kind"] == kind and e["item"] == item and e.get("load_case") == load_case:
-            return test_id
-    raise DataError([f"{MANIFEST}: no {kind} test for {item!r}"
-                     + (f" ({load_case})" if load_case else "")])

@@ -33,8 +33,8 @@ import numpy as np
 from numba import njit, prange
 
 from harnesspipe.fe.beam import element_response
-from harnesspipe.fe.hardening import _pow, return_map_from
-from harnesspipe.fe.rotation import _ts_inv_coeff, log_matrix
+from harnesspipe.fe.hardening import positive_pow, return_map_from
+from harnesspipe.fe.rotation import ts_inverse_coeff, log_matrix
 
 
 PARALLEL_MIN_EL = 64   # fewer elements per thread than this: one chunk (thread overhead)
@@ -81,7 +81,7 @@ def _section_force(e0, kappa_y, kappa_z, y, z, area, eps_p, alpha, sa_h, e, g, E
 def _ts_inv_t_apply(th, m0, m1, m2):
     """Ts^-T(theta) m = m + (theta x m)/2 + c(a) (theta (theta.m) - a^2 m) (a tuple)."""
     a2 = th[0] * th[0] + th[1] * th[1] + th[2] * th[2]
-    c = _ts_inv_coeff(np.sqrt(a2))
+    c = ts_inverse_coeff(np.sqrt(a2))
     tm = th[0] * m0 + th[1] * m1 + th[2] * m2
     r0 = m0 + 0.5 * (th[1] * m2 - th[2] * m1) + c * (th[0] * tm - a2 * m0)
     r1 = m1 + 0.5 * (th[2] * m0 - th[0] * m2) + c * (th[1] * tm - a2 * m1)
@@ -353,7 +353,7 @@ def beam_forces_reference(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_ar
             for g in range(alpha_t.shape[1]):
                 for f in range(alpha_t.shape[2]):
                     al = alpha_t[e, g, f]
-                    sa_t[e, g, f] = _pow(al, mats[m, 3]) if al > 0.0 else 0.0
+                    sa_t[e, g, f] = positive_pow(al, mats[m, 3]) if al > 0.0 else 0.0
     for e in range(n_el):
         a = conn[e, 0]
         b = conn[e, 1]

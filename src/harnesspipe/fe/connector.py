@@ -38,12 +38,3 @@ def connector_force(d, d_dot, k_diag, alpha, f):
     """f = K d + alpha K d_dot (eqs. 14-15) for relative motion d in the connector frame."""
     for i in range(6):
         f[i] = k_diag[i] * (d[i] + alpha * d_dot[i])
-
-
-@njit(cache=True)
-def connector_energy(d, k_diag):
-    """Elastic energy 1/2 d^T K d stored in the springs."""
-    e = 0.0
-    for i in range(6):
-        e += 0.5 * k_diag[i] * d[i] * d[i]
-    return e

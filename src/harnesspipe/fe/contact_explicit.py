@@ -68,7 +68,6 @@ from harnesspipe.fe.spatial_hash import (box_pairs, node_aabbs, quad_aabbs, segm
 PARALLEL_COS = (0.98, 0.995)   # |cos| of two segments: crossing rule below, parallel rule above,
                                # both blended in between (see _segment_points)
 WW_POINTS = 3           # wire-wire contact points per pair: crossing point, two parallel ends
-EDGE_TOL = 0.05         # half width (in xi) of the partition-of-unity band at quad edges
 DEFAULT_MAXS = 8
 CHUNK = 64              # items per parallel task (scratch arrays are allocated per task)
 SERIAL_MAX_CHUNKS = 1   # up to this many tasks a loop runs serially (no parallel-region cost)
@@ -306,17 +305,6 @@ def _project_quad(x, quads, q, p, clamp, out):
     out[5] = n0 / nn
     out[6] = n1 / nn
     out[7] = n2 / nn
-
-
-@njit(cache=True, inline="always")
-def _ramp(u):
-    """Partition-of-unity weight across a quad edge: 1 inside, 1/2 on the edge, 0 beyond."""
-    a = abs(u)
-    if a <= 1.0 - EDGE_TOL:
-        return 1.0
-    if a >= 1.0 + EDGE_TOL:
-        return 0.0
-    return 0.5 * (1.0 + EDGE_TOL - a) / EDGE_TOL
 
 
 # ---------------------------------------------------------------- (a) wire-wire contact

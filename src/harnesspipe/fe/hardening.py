@@ -32,7 +32,7 @@ RETURN_MAXIT = 60
 
 
 @njit(cache=True)
-def _pow(x, p):
+def positive_pow(x, p):
     """x**p for x > 0 (exp/log form: one transcendental pair, no special cases)."""
     return np.exp(p * np.log(x))
 
@@ -42,7 +42,7 @@ def flow_stress(eps_p, sigma_y, K, n):
     """Flow stress sigma_Y + K eps_p**n (eq. 2)."""
     if eps_p <= 0.0:
         return sigma_y
-    return sigma_y + K * _pow(eps_p, n)
+    return sigma_y + K * positive_pow(eps_p, n)
 
 
 @njit(cache=True)
@@ -51,7 +51,7 @@ def hardening_slope(eps_p, K, n):
     if K == 0.0:
         return 0.0
     e = eps_p if eps_p > EPS_P_FLOOR else EPS_P_FLOOR
-    return K * n * _pow(e, n - 1.0)
+    return K * n * positive_pow(e, n - 1.0)
 
 
 @njit(cache=True)
@@ -65,7 +65,7 @@ def return_map(q_trial, c, eps_p_old, sigma_y, K, n):
     returned state, obtained without another power.
     """
     a = eps_p_old
-    sa = _pow(a, n) if (a > 0.0 and K != 0.0) else 0.0   # a**n
+    sa = positive_pow(a, n) if (a > 0.0 and K != 0.0) else 0.0   # a**n
     dg, H, _ = return_map_from(q_trial, c, a, sa, sigma_y, K, n)
     return dg, H
 
@@ -90,13 +90,13 @@ def return_map_from(q_trial, c, eps_p_old, sa, sigma_y, K, n):
         m = 1.0 / n
         s = sa                          # unknown s = e**n, h(s) = A - K s - c s**m
         hi = A / K                      # h(hi) < 0
-        e = _pow(s, m) if s > 0.0 else 0.0
+        e = positive_pow(s, m) if s > 0.0 else 0.0
         for _ in range(RETURN_MAXIT):
             h = A - K * s - c * e
             if abs(h) <= tol:
                 break
             s = min(max(s + h / (K + (c * m * e / s if s > 0.0 else 0.0)), sa), hi)
-            e = _pow(s, m) if s > 0.0 else 0.0     # (e, s) stay a pair, converged or not
+            e = positive_pow(s, m) if s > 0.0 else 0.0     # (e, s) stay a pair, converged or not
         dg = e - a if e > a else 0.0
         if e <= EPS_P_FLOOR:
             return dg, hardening_slope(e, K, n), s
@@ -110,16 +110,5 @@ def return_map_from(q_trial, c, eps_p_old, sa, sigma_y, K, n):
             break
         dh = c + (K * n * se / e if e > 0.0 else 0.0)
         e = min(max(e + h / dh, a), hi)
-        se = _pow(e, n)
+        se = positive_pow(e, n)
     return e - a, hardening_slope(e, K, n), se
-
-
-@njit(cache=True)
-def plastic_increment(q_trial, c, eps_p_old, sigma_y, K, n):
-    """Solve  q_trial - c*dg = flow_stress(eps_p_old + dg)  for dg >= 0.
-
-    ``q_trial`` is the trial equivalent stress and ``c`` the elastic stiffness
-    conjugate to it: ``E`` for a uniaxial fibre, ``3G`` for the 3D radial return.
-    Returns 0 if the trial state is elastic (see :func:`return_map`).
-    """
-    return return_map(q_trial, c, eps_p_old, sigma_y, K, n)[0]

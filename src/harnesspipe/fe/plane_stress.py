@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.hardening import _pow, return_map_from
+from harnesspipe.fe.hardening import positive_pow, return_map_from
 
 STATE_SIZE = 6
 P11, P22, P33, P12, EPS_BAR_P, EPS33 = range(STATE_SIZE)
@@ -96,7 +96,7 @@ def j2_plane_stress(eps, state_old, E, nu, sigma_y, K, n, sig, D, state_new, wor
     Returns the effective plastic strain increment.
     """
     ep = state_old[EPS_BAR_P]
-    sa = _pow(ep, n) if (ep > 0.0 and K != 0.0) else 0.0
+    sa = positive_pow(ep, n) if (ep > 0.0 and K != 0.0) else 0.0
     return j2_plane_stress_from(eps, state_old, sa, E, nu, sigma_y, K, n, sig, D, state_new,
                                 work4, work44, True)[0]
 

@@ -155,7 +155,7 @@ def log_matrix(R, theta, work4):
 
 
 @njit(cache=True)
-def _ts_inv_coeff(a):
+def ts_inverse_coeff(a):
     """(1 - (a/2) cot(a/2)) / a^2, smooth at a = 0."""
     if a < SERIES_ANGLE:
         return 1.0 / 12.0 + a * a / 720.0
@@ -167,7 +167,7 @@ def _ts_inv_coeff(a):
 def ts_inv(theta, out):
     """Inverse tangent operator Ts^-1(theta) = I - S/2 + c(a) S^2 (delta theta = Ts^-1 delta w)."""
     a = np.sqrt(theta[0] ** 2 + theta[1] ** 2 + theta[2] ** 2)
-    c = _ts_inv_coeff(a)
+    c = ts_inverse_coeff(a)
     for i in range(3):
         for j in range(3):
             out[i, j] = c * (theta[i] * theta[j] - (a * a if i == j else 0.0))
