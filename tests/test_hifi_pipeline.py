@@ -685,3 +685,23 @@ def test_virtual_tests_of_the_calibration_cases_reuse_the_fits_runs(project):
         assert s["reused_from"] == f"results/hifi/chain/{step}/{case}", case
     for case in ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric", "twb19_t2"):
         assert "reused_from" not in json.loads((virtual / case / "summary.json").read_text()), case
+
+
+def test_chain_settings_are_what_a_fit_step_needs():
+    """The rules' settings of each chain step (stages/chain_settings.py): the start values
+    include what the step fits (a search the data cannot steer keeps them), the friction fits'
+    runs stop 1 mm past their window, and each case's model carries its own covering only."""
+    import json as json_
+    from harnesspipe.config import load, resolution
+    from harnesspipe.stages import chain_settings as chain
+    cfg = load()
+    for step, spec in chain.STEPS.items():
+        s = json_.loads(chain.fit_settings(cfg, step, resolution(cfg)))
+        assert set(spec["names"]) <= set(s["start"]) and s["cases"] == spec["cases"]
+        assert s["window"] == cfg["hifi"]["pipeline"][spec["window"]]
+        for case in s["cases"]:
+            assert set(s["models"][case]["coverings"]) == {chain.cases(cfg)[case]["covering"]}
+    rtb = json_.loads(chain.fit_settings(cfg, "mu_rtb", resolution(cfg)))
+    assert rtb["set"]["stop_deflection"] == 21.0 and rtb["bounds"] == [0.05, 0.6]
+    assert "stop_deflection" not in json_.loads(chain.fit_settings(cfg, "fabric", resolution(cfg)))["set"]
+    assert chain.interface_of(cfg, "twb19_t2", {"mu_rtp": 0.1, "E2_over_E1": 0.6}) == {"mu_rtp": 0.1}

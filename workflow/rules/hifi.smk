@@ -8,104 +8,30 @@
 # profile on 2 cores, 10 min at quick; crosscheck: 5 more runs).
 # Every virtual test is one thread, so two run side by side; a fit step takes its HIFI_STEPS cores.
 
+from harnesspipe.stages import chain_settings as CHAIN
+
 HIFI = config["hifi"]["pipeline"]
-HIFI_CASES = {**config["cases"], **config["hifi"]["extra_cases"]}
+HIFI_CASES = CHAIN.cases(config)
 HIFI_CROSSCHECK = sorted(c for c in config["paper"]["table3"] if c in config["cases"])
-HIFI_BUDGET = HIFI["budgets"].get(config["profile"], HIFI["budgets"]["default"])
 HIFI_MEASURED = {e["item"]: t for t, e in sorted(TESTS.items()) if e.get("kind") == "three_point"}
-INTERFACE_NAMES = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1")
-
-for _name in ("friction_window", "cohesive_window", "fabric_window", "mu_bounds", "E2_bounds"):
-    if not HIFI[_name][0] < HIFI[_name][1]:
-        raise ValueError(f"config hifi.pipeline.{_name}: {HIFI[_name]} must increase")
-
-# The chain of Sec. 4.2 in order: each step fixes what the earlier steps fitted.  cores: the
-# step's Snakemake threads.  Nothing else of the chain can run beside the friction and cohesive
-# fits (every virtual test needs their interface), so they take both cores (one process per
-# case, or one process with two Numba threads); the fabric fit takes one, and the virtual tests
-# of the other cases run beside it (one Numba thread per run is the efficient use of a core).
-HIFI_STEPS = {
-    "mu_rtb": {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": "friction_window",
-               "method": "bounded", "bounds": "mu_bounds", "prior": [], "cores": 2},
-    "mu_rtp": {"names": ["mu_rtp"], "cases": ["cwb19_t2_open_halflap"], "window": "friction_window",
-               "method": "bounded", "bounds": "mu_bounds", "prior": ["mu_rtb"], "cores": 2},
-    "cohesive": {"names": ["delta0", "delta_f", "alpha_d"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
-                 "window": "cohesive_window", "method": "simplex", "prior": ["mu_rtb", "mu_rtp"], "cores": 2},
-    "fabric": {"names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": "fabric_window",
-               "method": "bounded", "bounds": "E2_bounds", "prior": ["mu_rtb", "mu_rtp", "cohesive"],
-               "cores": 1},
-}
-HIFI_VALIDATION = ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric")   # Sec. 4.2: predicted, no refit
-HIFI_CALIBRATED = sorted({c for s in HIFI_STEPS.values() for c in s["cases"]})
+HIFI_STEPS = CHAIN.STEPS        # the chain of Sec. 4.2 and its cores (stages/chain_settings.py)
+CHAIN.check_windows(config)
 
 
 def hifi_fabric(case):
-    return HIFI_CASES[case]["covering"] == "fabric_tube"
+    return CHAIN.is_fabric(config, case)
 
 
 def hifi_model(case, paper_coverings=False):
-    """The part of the config a hi-fi run of `case` reads: its case entry, the covering it has
-    (and its material), wires and tape, test geometry, explicit settings and resolution.
-    A change elsewhere (another covering, the ROM, the branch) reruns none of its runs."""
-    c = HIFI_CASES[case]
-    cov = c["covering"]
-    covs = {} if cov == "none" else {cov: config["coverings"][cov]}
-    mats = {k: config["materials"][k] for k in ("wire_type1", "wire_type2", "pvc_tape")}
-    if covs:
-        mats[covs[cov]["material"]] = config["materials"][covs[cov]["material"]]
-    model = {
-        "profile": config["profile"],
-        "profiles": {config["profile"]: {"hifi": PROFILE["hifi"]}},
-        "cases": {case: c},
-        "hifi": {"coverings": "paper", "explicit": config["hifi"]["explicit"], "extra_cases": {}},
-        "interfaces": config["interfaces"],
-        "explicit": config["explicit"],
-        "materials": mats,
-        "coverings": covs,
-        "three_point": config["three_point"],
-    }
-    if paper_coverings:
-        model["paper"] = {"table2": {k: v for k, v in config["paper"]["table2"].items() if k in covs}}
-    return model
-
-
-def hifi_interface_of(case, values):
-    """Interface values a run of `case` uses (E2/E1 only with a fabric covering)."""
-    return {k: v for k, v in values.items() if k != "E2_over_E1" or hifi_fabric(case)}
+    return CHAIN.model(config, case, PROFILE, paper_coverings)
 
 
 def hifi_run_settings(case, crosscheck):
-    return json.dumps({
-        "model": hifi_model(case, paper_coverings=crosscheck),
-        "interface": hifi_interface_of(case, config["paper"]["interface"]) if crosscheck else {},
-        "set": HIFI["set"],
-    }, sort_keys=True)
+    return CHAIN.run_settings(config, case, PROFILE, crosscheck)
 
 
 def hifi_fit_settings(step):
-    s = HIFI_STEPS[step]
-    bounded = s["method"] == "bounded"
-    fabric = any(hifi_fabric(c) for c in s["cases"])
-    start = {k: v for k, v in config["hifi"]["parameters"].items() if k != "E2_over_E1" or fabric}
-    return json.dumps({
-        "names": s["names"], "cases": s["cases"], "window": HIFI[s["window"]], "method": s["method"],
-        "bounds": HIFI[s["bounds"]] if bounded else None,
-        "xatol": HIFI["bounded_xatol"] if bounded else HIFI["simplex"]["xatol"],
-        "fatol": None if bounded else HIFI["simplex"]["fatol"],
-        "maxfev": HIFI_BUDGET["bounded_maxfev" if bounded else "simplex_maxfev"],
-        "flat_factor": HIFI["flat_factor"],
-        "start": start, "models": {c: hifi_model(c) for c in s["cases"]},
-        "set": {**hifi_fit_stop(HIFI[s["window"]]), **HIFI["set"]},
-    }, sort_keys=True)
-
-
-def hifi_fit_stop(window):
-    """--set that ends a fit's runs just past its window (friction: < 20 mm of 30), if any."""
-    after = HIFI["stop_after_window"]
-    end = window[1] + (after or 0.0)
-    if after is None or end >= config["three_point"]["deflection"]:
-        return {}
-    return {"stop_deflection": end}
+    return CHAIN.fit_settings(config, step, PROFILE)
 
 
 def hifi_rom_settings(case):
@@ -156,9 +82,9 @@ def hifi_virtual_priority(wc):
 
 
 def hifi_role(case):
-    if case in HIFI_VALIDATION:
+    if case in CHAIN.VALIDATION:
         return "validation"
-    return "calibration" if case in HIFI_CALIBRATED else "prediction"
+    return "calibration" if case in CHAIN.CALIBRATED else "prediction"
 
 
 HIFI_CODE = code_hash("harnesspipe.stages.hifi_chain", "commands/stage.py")

@@ -1,0 +1,126 @@
+"""The hi-fi calibration chain of Sec. 4.2 and the settings its rules pass to the stages.
+
+The chain in order: each step fixes what the earlier steps fitted (``prior``).  ``cores``:
+the step's Snakemake threads.  Nothing else of the chain can run beside the friction and
+cohesive fits (every virtual test needs their interface), so they take both cores (one process
+per case, or one process with two Numba threads); the fabric fit takes one, and the virtual
+tests of the other cases run beside it (one Numba thread per run is the efficient use of a
+core).  ``window`` and ``bounds`` name keys of the config's ``hifi.pipeline``.
+
+The settings are JSON texts: a rule passes them as a param, so a rule reruns exactly when the
+settings of its run change (workflow/rules/hifi.smk).
+"""
+from __future__ import annotations
+
+import json
+
+STEPS = {
+    "mu_rtb": {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": "friction_window",
+               "method": "bounded", "bounds": "mu_bounds", "prior": [], "cores": 2},
+    "mu_rtp": {"names": ["mu_rtp"], "cases": ["cwb19_t2_open_halflap"],
+               "window": "friction_window", "method": "bounded", "bounds": "mu_bounds",
+               "prior": ["mu_rtb"], "cores": 2},
+    "cohesive": {"names": ["delta0", "delta_f", "alpha_d"],
+                 "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"], "window": "cohesive_window",
+                 "method": "simplex", "prior": ["mu_rtb", "mu_rtp"], "cores": 2},
+    "fabric": {"names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": "fabric_window",
+               "method": "bounded", "bounds": "E2_bounds", "prior": ["mu_rtb", "mu_rtp", "cohesive"],
+               "cores": 1},
+}
+VALIDATION = ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric")   # Sec. 4.2: predicted, no refit
+CALIBRATED = sorted({c for s in STEPS.values() for c in s["cases"]})
+WINDOWS = ("friction_window", "cohesive_window", "fabric_window", "mu_bounds", "E2_bounds")
+
+
+def check_windows(config: dict) -> None:
+    """Every window and bound of ``hifi.pipeline`` increases (ValueError naming it)."""
+    pipe = config["hifi"]["pipeline"]
+    for name in WINDOWS:
+        if not pipe[name][0] < pipe[name][1]:
+            raise ValueError(f"config hifi.pipeline.{name}: {pipe[name]} must increase")
+
+
+def cases(config: dict) -> dict:
+    """Every case a hi-fi rule runs: the config's cases and ``hifi.extra_cases``."""
+    return {**config["cases"], **config["hifi"]["extra_cases"]}
+
+
+def is_fabric(config: dict, case: str) -> bool:
+    return cases(config)[case]["covering"] == "fabric_tube"
+
+
+def budget(config: dict) -> dict:
+    """Hi-fi evaluations per fit at the config's profile (missing profile: default)."""
+    budgets = config["hifi"]["pipeline"]["budgets"]
+    return budgets.get(config["profile"], budgets["default"])
+
+
+def model(config: dict, case: str, resolution: dict, paper_coverings: bool = False) -> dict:
+    """The part of the config a hi-fi run of ``case`` reads: its case entry, the covering it
+    has (and its material), wires and tape, test geometry, explicit settings and
+    ``resolution`` (the profile's, :func:`harnesspipe.config.resolution`).  A change elsewhere
+    (another covering, the ROM, the branch) reruns none of its runs."""
+    c = cases(config)[case]
+    cov = c["covering"]
+    covs = {} if cov == "none" else {cov: config["coverings"][cov]}
+    mats = {k: config["materials"][k] for k in ("wire_type1", "wire_type2", "pvc_tape")}
+    if covs:
+        mats[covs[cov]["material"]] = config["materials"][covs[cov]["material"]]
+    out = {
+        "profile": config["profile"],
+        "profiles": {config["profile"]: {"hifi": resolution["hifi"]}},
+        "cases": {case: c},
+        "hifi": {"coverings": "paper", "explicit": config["hifi"]["explicit"], "extra_cases": {}},
+        "interfaces": config["interfaces"],
+        "explicit": config["explicit"],
+        "materials": mats,
+        "coverings": covs,
+        "three_point": config["three_point"],
+    }
+    if paper_coverings:
+        out["paper"] = {"table2": {k: v for k, v in config["paper"]["table2"].items() if k in covs}}
+    return out
+
+
+def interface_of(config: dict, case: str, values: dict) -> dict:
+    """Interface values a run of ``case`` uses (E2/E1 only with a fabric covering)."""
+    return {k: v for k, v in values.items() if k != "E2_over_E1" or is_fabric(config, case)}
+
+
+def run_settings(config: dict, case: str, resolution: dict, crosscheck: bool) -> str:
+    """Settings of a virtual test (``stage hifi-run``): at the paper's Table 2 and interface
+    for the cross-check, else at the chain's interface (given to the stage as a file)."""
+    return json.dumps({
+        "model": model(config, case, resolution, paper_coverings=crosscheck),
+        "interface": interface_of(config, case, config["paper"]["interface"]) if crosscheck else {},
+        "set": config["hifi"]["pipeline"]["set"],
+    }, sort_keys=True)
+
+
+def fit_stop(config: dict, window) -> dict:
+    """``--set`` that ends a fit's runs just past its window (friction: < 20 mm of 30), if any."""
+    after = config["hifi"]["pipeline"]["stop_after_window"]
+    end = window[1] + (after or 0.0)
+    if after is None or end >= config["three_point"]["deflection"]:
+        return {}
+    return {"stop_deflection": end}
+
+
+def fit_settings(config: dict, step: str, resolution: dict) -> str:
+    """Settings of one chain step (``stage hifi-fit``, :func:`harnesspipe.stages.hifi_chain.fit_step`)."""
+    pipe = config["hifi"]["pipeline"]
+    s = STEPS[step]
+    bounded = s["method"] == "bounded"
+    fabric = any(is_fabric(config, c) for c in s["cases"])
+    start = {k: v for k, v in config["hifi"]["parameters"].items() if k != "E2_over_E1" or fabric}
+    window = pipe[s["window"]]
+    return json.dumps({
+        "names": s["names"], "cases": s["cases"], "window": window, "method": s["method"],
+        "bounds": pipe[s["bounds"]] if bounded else None,
+        "xatol": pipe["bounded_xatol"] if bounded else pipe["simplex"]["xatol"],
+        "fatol": None if bounded else pipe["simplex"]["fatol"],
+        "maxfev": budget(config)["bounded_maxfev" if bounded else "simplex_maxfev"],
+        "flat_factor": pipe["flat_factor"],
+        "start": start, "models": {c: model(config, c, resolution) for c in s["cases"]},
+        "set": {**fit_stop(config, window), **pipe["set"]},
+    }, sort_keys=True)
