@@ -13,6 +13,8 @@ configfile: "config/config.yaml"
 
 from harnesspipe import config as hp_config
 from harnesspipe.provenance import code_hash, source_hash
+from harnesspipe.stages import stage_settings as SETTINGS   # the settings rules pass to stages
+from harnesspipe.stages import targets as CATALOGUE   # targets, stage fits, report inputs
 
 hp_config.validate(config, source="config/config.yaml (with --config overrides)")
 
@@ -21,9 +23,6 @@ HP = f'"{PY}" -m harnesspipe'
 DATA = config["data_dir"]
 RES = "results"
 PROFILE = hp_config.resolution(config)
-FITS = {}     # stage -> fit.json paths; each stage rule file adds its own
-TARGETS = []  # summary tables; each stage rule file adds its own
-REPORT_EXTRA = []  # further results the report shows (e.g. the hi-fi branch run)
 
 
 include: "workflow/rules/common.smk"
@@ -37,6 +36,5 @@ include: "workflow/rules/report.smk"
 
 rule all:
     input:
-        TARGETS,
-        f"{RES}/report/index.html",
+        CATALOGUE.final_targets(config, TESTS, RES),
     default_target: True

@@ -14,7 +14,6 @@ import platform
 import time
 
 import numpy as np
-
 from benchlib import write_section
 
 HEADING = "## Branch Y-harness hi-fi"
@@ -29,7 +28,7 @@ def main() -> None:
     import numba
 
     from harnesspipe.config import load
-    from harnesspipe.fe.dynamics import integrate
+    from harnesspipe.fe.solvers.central_difference import integrate
     from harnesspipe.models import branch, hifi_branch
     from harnesspipe.models.branch import Geometry
     from harnesspipe.stages.branch_hifi import inputs, settings_from_config

@@ -5,7 +5,7 @@ repeated runs per profile (after one untimed warm-up run in the same process, so
 compilation is excluded), the explicit step count and step, KE/IE and energy error, and
 the per-phase cost breakdown of the run from its own timers (the elements, the bundle's
 contacts and the cohesive ties are one phase: they run in concurrent lanes,
-fe/bundle_lanes.py; the contact search; the loading's contacts and damping; the
+fe/assembly/lanes.py; the contact search; the loading's contacts and damping; the
 integrator and bookkeeping); the first run in
 fresh processes with an empty and with a filled Numba cache (JIT cost, reported apart).
 ``--convergence`` adds the mesh study (the default profile against a finer mesh) and the
@@ -20,11 +20,11 @@ import argparse
 import os
 import platform
 import statistics
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
-
 from benchlib import BY_HAND, RESULTS, jit_seconds, section_tail, write_section
 
 HEADING = "## Hi-fi three-point"
@@ -48,7 +48,7 @@ def quick_system():
 
 def warm_up() -> None:
     """Build the quick model and integrate its first 2 ms: every kernel compiled or loaded."""
-    from harnesspipe.fe.dynamics import integrate
+    from harnesspipe.fe.solvers.central_difference import integrate
     integrate(quick_system()[0], 0.002)
 
 
@@ -65,12 +65,13 @@ def run(profile: str, overrides: dict | None = None):
 def family_costs(at: float = 0.4, calls: int = 100, repeat: int = 5) -> list[str]:
     """Cost per call of each force family at the quick model's state ``at`` T into its test
     (wires touching, fibres yielding): each family's own parallel kernel, one after the
-    other (:mod:`harnesspipe.models.hifi_reference`), against the concurrent lanes that run
+    other (tests/hifi_reference.py), against the concurrent lanes that run
     them in a run; with the contact search and the integrator's step.  Each figure is the
     median over ``repeat`` rounds of the mean of ``calls`` calls from the same saved state."""
-    from harnesspipe.fe.dynamics import DynamicsSettings, close_and_kick, integrate
-    from harnesspipe.models.hifi_reference import (FAMILY_KERNELS, restore_histories,
-                                                   save_histories, separate_forces)
+    from harnesspipe.fe.solvers.central_difference import (DynamicsSettings, close_and_kick,
+                                                           integrate)
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from hifi_reference import FAMILY_KERNELS, restore_histories, save_histories, separate_forces
     s, inp = quick_system()
     res = integrate(s, at * s.T, DynamicsSettings(safety=inp.explicit["safety"], n_output=2))
     dt, steps_per_search = res.dt, res.n_steps / s.searches

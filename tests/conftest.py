@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import re
 import shutil
 from pathlib import Path
 
@@ -59,3 +60,21 @@ def copy_project(dest: Path) -> Path:
                                     "*.egg-info", "artifacts", ".git", ".pytest_cache")
     shutil.copytree(REPO, dest, ignore=ignore)
     return dest
+
+
+def job_stats(run) -> dict[str, int]:
+    """Rule -> job count of a finished ``snakemake --dry-run`` (subprocess result; {} when
+    nothing is to be done)."""
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    text = run.stdout + run.stderr
+    if "Nothing to be done" in text:
+        return {}
+    table = text.split("Job stats:")[1]
+    return {m.group(1): int(m.group(2)) for m in re.finditer(r"^(\w+)\s+(\d+)\s*$", table, re.M)
+            if m.group(1) != "total"}
+
+
+@pytest.fixture(scope="module")
+def config() -> dict:
+    """The shipped config/config.yaml as plain YAML (no validation, no profile resolution)."""
+    return yaml.safe_load((REPO / "config" / "config.yaml").read_text())

@@ -8,8 +8,8 @@ import pytest
 from harnesspipe.calibrate.branch import fit_alpha
 from harnesspipe.cli import InputError
 from harnesspipe.commands.branch import add_branch_parser
-from harnesspipe.fe.connector import bushing_stiffness
-from harnesspipe.fe.newmark_band import integrate, time_grid
+from harnesspipe.fe.elements.bushing import bushing_stiffness
+from harnesspipe.fe.solvers.newmark import integrate, time_grid
 from harnesspipe.models import branch
 
 COARSE = dict(n_steps=30, mesh=branch.BranchMesh(element_size=30.0, n_rings=2, n_sectors=6))

@@ -1,4 +1,4 @@
-"""The bundle's concurrent force lanes (fe/bundle_lanes.py): the same forces and
+"""The bundle's concurrent force lanes (fe/assembly/lanes.py): the same forces and
 histories (elements, wire-wire and node-facet contact, cohesive ties, pins) as the separate
 kernels, bit for bit, whatever the beam split; the split that balances the lanes is found
 from the calls' times; meshes whose beams and shells share nodes are refused."""
@@ -6,12 +6,11 @@ import numpy as np
 import pytest
 
 from harnesspipe.config import load
-from harnesspipe.fe.bundle_lanes import BeamSplit, check_disjoint, stack_groups
-from harnesspipe.fe.dynamics import DynamicsSettings, integrate
+from harnesspipe.fe.assembly.lanes import BeamSplit, check_disjoint, stack_groups
+from harnesspipe.fe.solvers.central_difference import DynamicsSettings, integrate
 from harnesspipe.models import hifi_mesh as hm
-from harnesspipe.models.hifi import QUAD_TIE_SPEC, HifiSystem
-from harnesspipe.models.hifi_reference import (history_arrays, restore_histories,
-                                               save_histories, separate_forces)
+from harnesspipe.models.hifi import HifiSystem
+from hifi_reference import history_arrays, restore_histories, save_histories, separate_forces
 from harnesspipe.stages.hifi import inputs
 
 
@@ -63,7 +62,7 @@ class _FreshArguments(HifiSystem):
     """A system that builds bundle_forces' argument list anew at every call."""
 
     def _bundle_forces(self, v, dt, F):
-        self._lane_args = None
+        self._lane_groups = None
         return super()._bundle_forces(v, dt, F)
 
 
@@ -117,12 +116,14 @@ def test_stacked_groups_share_their_histories_with_the_groups():
     spec = {"ids": ((), np.int64), "xi": ((2,), float), "D": ((), float)}
     groups = [dict(ids=np.array([3, 4]), xi=np.ones((2, 2)), D=np.zeros(2)),
               dict(ids=np.array([7]), xi=2 * np.ones((1, 2)), D=np.zeros(1))]
-    (ids, xi, D), (off, _, _) = stack_groups(groups, spec, shared=("D",))
+    arrays, offsets = stack_groups(groups, spec, shared=("D",))
+    (ids, xi, D), off = arrays.values(), offsets["ids"]
     assert ids.tolist() == [3, 4, 7] and off.tolist() == [0, 2, 3]
     assert xi[2].tolist() == [2.0, 2.0]
     D[2] = 0.5                                       # the kernel damages tie 0 of group 1
     assert groups[1]["D"][0] == 0.5 and groups[0]["D"].tolist() == [0.0, 0.0]
-    (ids, xi, D), (off, _, _) = stack_groups([], spec)
+    arrays, offsets = stack_groups([], spec)
+    (ids, xi, D), off = arrays.values(), offsets["ids"]
     assert ids.shape == (0,) and xi.shape == (0, 2) and off.tolist() == [0]
 
 
@@ -145,7 +146,7 @@ def test_tie_groups_keep_their_order_across_kinds():
     s = SimpleNamespace(ties=[quad(3), beam, quad(5)])
     HifiSystem._stack_ties(s)
     assert s.tie_order.tolist() == [[0, 0], [1, 0], [0, 1]]
-    assert s.quad_ties[-1].tolist() == [[0, 0], [3, 2], [8, 4]]     # offsets: ties, quads
-    assert s.beam_ties[-1].tolist() == [0, 2]
-    s.quad_ties[list(QUAD_TIE_SPEC).index("tie_D")][4] = 1.0          # tie_D of the tape's tie 1
+    assert s.quad_ties.off.tolist() == [[0, 0], [3, 2], [8, 4]]     # offsets: ties, quads
+    assert s.beam_ties.off.tolist() == [0, 2]
+    s.quad_ties.tie_D[4] = 1.0                                      # the tape's tie 1
     assert s.ties[2]["tie_D"][1] == 1.0

@@ -1,17 +1,21 @@
-"""Contact, friction and cohesive kernels of the explicit bundle model (fe/contact_explicit.py)."""
+"""Contact, friction and cohesive kernels of the explicit bundle model (fe/contact/)."""
 import math
 
 import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from harnesspipe.fe.cohesive import cohesive_dissipated_energy
-from harnesspipe.fe.contact_explicit import (
-    beam_beam_contact, cohesive_tie_dissipation, cohesive_ties_quad,
-    SOFTMIN_TAU, WW_POINTS, chain_cylinder_contact, facets_cylinder_contact, facets_cylinder_gaps,
-    fit_slot_history, make_ties, new_slot_history, near_node_facet_pairs, node_facet_contact)
-from harnesspipe.fe.spatial_hash import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
-                                         quad_aabbs, segment_aabbs, segment_distance)
+from harnesspipe.fe.contact.cohesive_ties import cohesive_tie_dissipation, cohesive_ties_quad
+from harnesspipe.fe.contact.common import fit_slot_history, new_slot_history
+from harnesspipe.fe.contact.facet_pins import (SOFTMIN_TAU, facets_cylinder_contact,
+                                               facets_cylinder_gaps)
+from harnesspipe.fe.contact.node_facet import near_node_facet_pairs, node_facet_contact
+from harnesspipe.fe.contact.search import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
+                                           quad_aabbs, segment_aabbs, segment_distance)
+from harnesspipe.fe.contact.tie_targets import make_ties
+from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact
+from harnesspipe.fe.contact.wire_wire import WW_POINTS, beam_beam_contact
+from harnesspipe.fe.materials.cohesive import cohesive_dissipated_energy
 
 R_W = 0.65
 
@@ -803,7 +807,7 @@ def test_damaged_ties_are_conservative_when_closing_differs_from_opening():
     (undamaged penalty) and shear (damaged) has a traction not parallel to its separation.
     Its forces must still derive from its energy: zero work around a closed path on which
     the target turns (quad frame, or the wire anchor's rotation) and the tied node moves."""
-    from harnesspipe.fe.contact_explicit import cohesive_ties_beam
+    from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_beam
     from harnesspipe.fe.rotation import quat_from_rotvec
     axis = np.array([1.0, 0.3, 0.2])
     x0, quads, tq = _quad_tie()

@@ -3,8 +3,9 @@ import numpy as np
 import pytest
 
 import harnesspipe  # noqa: F401
-from harnesspipe.fe import beam, rotation
-from harnesspipe.fe.fiber import disc_fibres
+from harnesspipe.fe import rotation
+from harnesspipe.fe.elements import beam
+from harnesspipe.fe.materials.fiber import disc_fibres
 
 E, SIGMA_Y, K, N = 100.0, 1.0, 10.0, 0.5
 GJ = 50.0

@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from harnesspipe.fe.beam import assemble_beams, initial_frames, lobatto_points
-from harnesspipe.fe.beam_explicit import (beam_forces, beam_lumped_mass, beam_plastic_work,
-                                          beam_stable_step)
-from harnesspipe.fe.fiber import disc_fibres
+from harnesspipe.fe.elements.beam import assemble_beams, initial_frames, lobatto_points
+from harnesspipe.fe.elements.beam_explicit import (beam_forces, beam_lumped_mass, beam_plastic_work,
+                                                   beam_stable_step)
+from harnesspipe.fe.materials.fiber import disc_fibres
 from harnesspipe.fe.rotation import rotate_nodes
 
 
@@ -148,7 +148,7 @@ def _random_chain_state(seed, n_wires=4, n_el=40, rot=0.6):
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_lean_forces_equal_element_response_at_large_rotations_with_yielding(seed):
-    from harnesspipe.fe.beam_explicit import beam_forces_reference
+    from harnesspipe.fe.elements.beam_explicit import beam_forces_reference
     X, conn, R0, x, quat, rng = _random_chain_state(seed)
     xi, w = lobatto_points(3)
     secs = [disc_fibres(r, 3, 4) for r in (0.7, 0.6)]

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import harnesspipe  # noqa: F401
-from harnesspipe.fe.cohesive import cohesive_dissipated_energy, cohesive_traction
+from harnesspipe.fe.materials.cohesive import cohesive_dissipated_energy, cohesive_traction
 
 K0, D0, DF, ALPHA = 30.0, 0.03, 0.08, 2.0   # paper values (DESIGN sec. 3)
 K = np.full(3, K0)

@@ -3,11 +3,12 @@ import time
 
 import numpy as np
 import pytest
+from explicit_beam_driver import (BeamExplicit, ExplicitSettings, run_explicit, stable_step,
+                                  wave_step)
 
 import harnesspipe  # noqa: F401
 from harnesspipe import rom
-from harnesspipe.fe.explicit import (BeamExplicit, ExplicitError, ExplicitSettings, run_explicit,
-                                     smooth_step, stable_step, wave_step)
+from harnesspipe.fe.solvers.central_difference import ExplicitError, smooth_step
 from harnesspipe.models.rom_beam import BeamSystem, Material, Mesh
 
 E, NU, RADIUS, SPAN, DEFL = 20.0, 0.39, 7.0, 127.0, 5.0
@@ -53,7 +54,7 @@ def test_pinned_beam_quasi_static_matches_rom():
     t0 = time.perf_counter()
     res = run_explicit(problem, T)
     elapsed = time.perf_counter() - t0
-    # the bending limit governs this thick, fine beam (documented in fe/explicit.py)
+    # the bending limit governs this thick, fine beam (documented in fe/solvers/central_difference.py)
     assert res.dt_beam < res.dt_wave
     assert res.dt <= 0.9 * min(res.dt_wave, res.dt_beam) * (1 + 1e-12)
     force = -res.reactions[load_dof]
@@ -83,7 +84,7 @@ def test_absurd_step_stops_with_clear_error():
 
 
 def test_smooth_step_time_inverts_the_amplitude():
-    from harnesspipe.fe.explicit import smooth_step, smooth_step_time
+    from harnesspipe.fe.solvers.central_difference import smooth_step, smooth_step_time
     from harnesspipe.models.hifi import end_time
     for r in (0.0, 0.1, 2.0 / 3.0, 0.999, 1.0):
         assert smooth_step(smooth_step_time(r))[0] == pytest.approx(r, abs=1e-12)

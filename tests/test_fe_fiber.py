@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 import harnesspipe  # noqa: F401
-from harnesspipe.fe.fiber import disc_fibres, fibre_update, section_response
-from harnesspipe.fe.hardening import flow_stress
+from harnesspipe.fe.materials.fiber import disc_fibres, fibre_update, section_response
+from harnesspipe.fe.materials.hardening import flow_stress
 
 
 @pytest.mark.parametrize("n_rings,n_sectors", [(2, 3), (4, 12), (7, 20)])
@@ -78,7 +78,7 @@ def test_section_tangent_matches_finite_difference():
 @pytest.mark.parametrize("n", [0.12, 0.3, 1.0, 1.5, 2.0])
 @pytest.mark.parametrize("alpha_old", [0.0, 1e-9, 1e-3, 0.2])
 def test_return_map_solves_eq2_and_gives_the_slope(n, alpha_old):
-    from harnesspipe.fe.hardening import hardening_slope, return_map
+    from harnesspipe.fe.materials.hardening import hardening_slope, return_map
     c, sigma_y, K = 1559.0, 8.6, 25.6
     for over in (1e-9, 1e-4, 1e-2, 0.5, 10.0):
         q = flow_stress(alpha_old, sigma_y, K, n) * (1.0 + over)

@@ -5,12 +5,8 @@ import numpy as np
 import pytest
 
 import harnesspipe  # noqa: F401
-from harnesspipe.fe.friction import (
-    coulomb_return_map,
-    equivalent_slip_rate,
-    friction_coefficient,
-    rate_dependent_friction,
-)
+from harnesspipe.fe.materials.friction import (coulomb_return_map, equivalent_slip_rate,
+                                               friction_coefficient, rate_dependent_friction)
 
 MU_S, MU_K, D_C = 0.4, 0.1, 2.0   # wire-wire values (DESIGN sec. 3)
 N = 5.0                           # normal force (N)

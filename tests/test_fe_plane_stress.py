@@ -5,9 +5,10 @@ import pytest
 from scipy.optimize import brentq
 
 import harnesspipe  # noqa: F401  (sets the Numba cache)
-from harnesspipe.fe.hardening import flow_stress
-from harnesspipe.fe.plane_stress import (EPS33, EPS_BAR_P, STATE_SIZE, fabric_shear_modulus,
-                                         j2_plane_stress, orthotropic_plane_stress_stiffness)
+from harnesspipe.fe.materials.hardening import flow_stress
+from harnesspipe.fe.materials.plane_stress import (EPS33, EPS_BAR_P, STATE_SIZE,
+                                                   fabric_shear_modulus, j2_plane_stress,
+                                                   orthotropic_plane_stress_stiffness)
 
 # closed plastic tube, Table 2 (n < 1), and a hardening exponent above 1
 MATERIALS = [(1559.0, 0.42, 8.6, 25.6, 0.12), (93.5, 0.4, 10.0, 30.8, 0.60),

@@ -4,10 +4,10 @@ import pytest
 from scipy.optimize import brentq
 
 import harnesspipe  # noqa: F401  (sets the Numba cache)
-from harnesspipe.fe.hardening import flow_stress
-from harnesspipe.fe.shell import DOF_PER_NODE, Shell, lumped_mass
-from harnesspipe.fe.shell_axisym import AxisymShell
-from harnesspipe.fe.shell_static import Controls, solve
+from harnesspipe.fe.elements.shell import DOF_PER_NODE, Shell, lumped_mass
+from harnesspipe.fe.elements.shell_axisym import AxisymShell
+from harnesspipe.fe.materials.hardening import flow_stress
+from harnesspipe.fe.solvers.static_dense import Controls, solve
 
 BIG = 1e30  # yield stress of an elastic material
 
@@ -205,7 +205,7 @@ FABRIC = (93.5, 31.0, 0.3)  # E1 (Sec. 3.2), an illustrative weft E2, nu12
 def orthotropic_strip(axis, L=10.0, W=2.0, t=0.3, U=0.01):
     """Linear response of a flat strip pulled along x by U, free lateral edges (uniaxial
     stress); returns (axial force, lateral strain, model)."""
-    from harnesspipe.fe.plane_stress import fabric_shear_modulus
+    from harnesspipe.fe.materials.plane_stress import fabric_shear_modulus
     X, conn = grid(np.linspace(0, L, 5), np.linspace(0, W, 3))
     model = Shell.orthotropic(X, conn, t, *FABRIC, axis=axis)
     assert model.mat[3] == pytest.approx(fabric_shear_modulus(*FABRIC))
@@ -239,7 +239,7 @@ def test_orthotropic_strip_along_directions_1_and_2():
 
 @pytest.mark.parametrize("axis", [(1.0, 1.0, 0.0), (1.0, 1.0, 0.9)])  # second: projected
 def test_orthotropic_strip_at_45_degrees_apparent_modulus(axis):
-    from harnesspipe.fe.plane_stress import fabric_shear_modulus
+    from harnesspipe.fe.materials.plane_stress import fabric_shear_modulus
     E1, E2, nu12 = FABRIC
     G12 = fabric_shear_modulus(E1, E2, nu12)
     L, W, t, U = 10.0, 2.0, 0.3, 0.01

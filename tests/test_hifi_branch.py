@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from harnesspipe.config import load
-from harnesspipe.fe.dynamics import DynamicsSettings, integrate
+from harnesspipe.fe.solvers.central_difference import DynamicsSettings, integrate
 from harnesspipe.models import hifi_branch as hb
 from harnesspipe.models import hifi_mesh as hm
 from harnesspipe.models.branch import Geometry

@@ -45,3 +45,39 @@ def test_an_input_that_applies_does_change_the_run():
     """The comparison above can fail: the roller-tape friction moves a TWB's curve."""
     a, b = _run("twb19_t2"), _run("twb19_t2", mu_rtp=0.55)
     assert not a.history["force_N"].equals(b.history["force_N"])
+
+
+def test_build_state_keys_reach_the_run():
+    """--set wire_fill / end_tape_layers (config hifi.build) go into the run's config (so into
+    the mesh and the shells); an unknown key or a value the schema refuses is refused."""
+    from harnesspipe.config import ConfigError
+    cfg = load()
+    inp = inputs(cfg, "cwb19_t2_closed", {"wire_fill": "0.25"})
+    assert inp.config["hifi"]["build"]["wire_fill"] == 0.25
+    assert cfg["hifi"]["build"]["wire_fill"] == 0.0            # the config is not changed
+    with pytest.raises(ConfigError, match="wire_fill"):
+        inputs(cfg, "cwb19_t2_closed", {"wire_filling": "0.25"})
+    with pytest.raises(ConfigError, match="wire_fill=1.5: expected a fraction"):
+        inputs(cfg, "cwb19_t2_closed", {"wire_fill": "1.5"})
+    with pytest.raises(ConfigError, match="end_tape_layers=0.5: expected a number of wraps"):
+        inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "0.5"})
+    assert inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "2.5"}).config["hifi"]["build"] == {
+        "wire_fill": 0.0, "end_tape_layers": 2.5}
+
+
+def test_end_tape_layers_thicken_the_end_bands_only():
+    """end_tape_layers scales the stiffness (and mass) thickness of the end bands' tape and of
+    nothing else: not the helix, not the tube."""
+    from harnesspipe.models import hifi_mesh as hm
+    from harnesspipe.models.hifi_bundle import shell_materials
+    cfg = load()
+    one = inputs(cfg, "cwb19_t2_open_halflap", {})
+    three = inputs(cfg, "cwb19_t2_open_halflap", {"end_tape_layers": "3"})
+    mesh = hm.build_mesh(one.case, one.config, "quick")
+    _, t1, rho1 = shell_materials(mesh, one)
+    _, t3, rho3 = shell_materials(mesh, three)
+    ends = np.isin(mesh.shell_group, (hm.GROUP_END_LEFT, hm.GROUP_END_RIGHT))
+    assert ends.any() and (~ends & (mesh.shell_part == hm.PART_TAPE)).any()
+    np.testing.assert_allclose(t3[ends], 3.0 * t1[ends])
+    np.testing.assert_array_equal(t3[~ends], t1[~ends])
+    np.testing.assert_array_equal(rho3, rho1)

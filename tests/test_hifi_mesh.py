@@ -5,20 +5,13 @@ import itertools
 
 import numpy as np
 import pytest
-import yaml
 
 from harnesspipe.models.hifi_mesh import (GROUP_COVERING, GROUP_END_LEFT, GROUP_HELIX, PART_FABRIC,
                                           PART_TAPE, PART_TUBE, PRESETS, TIE_COVERING, TIE_TAPE,
                                           TIE_WIRES, build_mesh, coverage, element_sizes,
                                           shell_normals, to_meshio, write_vtu)
-from conftest import REPO
 
 RES = PRESETS["quick"]
-
-
-@pytest.fixture(scope="module")
-def config():
-    return yaml.safe_load((REPO / "config" / "config.yaml").read_text())
 
 
 @pytest.fixture(scope="module")
@@ -178,7 +171,7 @@ def test_halflap_covers_the_tube_twice(meshes):
 def test_every_tie_candidate_finds_its_target(meshes, name):
     """make_ties finds a target for every tie node: the wrap underneath (tape on tape), the
     covering, the wires."""
-    from harnesspipe.fe.contact_explicit import make_ties
+    from harnesspipe.fe.contact.tie_targets import make_ties
     m = meshes[name]
     tape_el = m.shell_part == PART_TAPE
     tape, cov = m.shell_conn[tape_el], m.shell_conn[~tape_el]

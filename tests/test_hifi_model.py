@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from harnesspipe.config import load
-from harnesspipe.fe.dynamics import DynamicsSettings, integrate
 from harnesspipe.fe.rotation import rotate_nodes
+from harnesspipe.fe.solvers.central_difference import DynamicsSettings, integrate
 from harnesspipe.models.hifi_parts import Wires
 
 
@@ -45,7 +45,7 @@ class PinnedWire:
         return self.w.stable_step(self.x)
 
     def forces(self, t, v, dt):
-        from harnesspipe.fe.explicit import smooth_step
+        from harnesspipe.fe.solvers.central_difference import smooth_step
         self.F[...] = 0.0
         self.w.add_forces(self.x, self.quat, self.F[0])
         self.F[1, self.mid, 1] = -self.P * smooth_step(min(t / (0.5 * self.T), 1.0))[0]
@@ -136,7 +136,7 @@ def test_close_and_kick_is_the_closing_half_step_then_the_next_opening():
     """close_and_kick (one step's closing half kick and the next's opening, fused) against
     the velocity-Verlet formulas; the closed step's work and KE do not depend on the next
     step, and h_next = 0 opens nothing (the last step; from rest, hdt = 0 closes nothing)."""
-    from harnesspipe.fe.dynamics import close_and_kick
+    from harnesspipe.fe.solvers.central_difference import close_and_kick
     rng = np.random.default_rng(5)
     n, P, hdt, h1 = 7, 3, 2e-4, 3e-4
     F = rng.standard_normal((P, n, 6))
@@ -206,8 +206,8 @@ def test_full_cwb_run_closes_the_energy_balance_and_creates_no_energy(cwb_run):
 
 
 def test_full_cwb_run_writes_shapes_and_slip_out(cwb_run):
-    import pandas as pd
     import meshio
+    import pandas as pd
     out, _ = cwb_run
     files = out / "files"
     vtus = sorted((files / "shapes").glob("*.vtu"))
@@ -272,7 +272,7 @@ def test_unstable_run_fails_with_diagnostics_and_writes_nothing(tmp_path):
 def test_beam_tie_carries_no_force_under_rigid_motion_and_its_moment_balances():
     """A tape node tied to a wire point with a lever arm: a rigid rotation of wire and node
     leaves the tie unloaded; a pulled tie exerts no net force or moment on the system."""
-    from harnesspipe.fe.contact_explicit import cohesive_ties_beam
+    from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_beam
     from harnesspipe.fe.rotation import quat_from_rotvec
     X = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [4.0, 0.75, 0.0]])
     seg = np.array([[0, 1]])

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import copy_project
+from conftest import copy_project, job_stats
 from harnesspipe.calibrate import hifi as hcal
 from harnesspipe.stages import hifi_chain
 
@@ -150,6 +150,24 @@ def test_flat_screen_ends_a_bounded_search_only_on_a_flat_error(tmp_path, slope,
         assert res.x[0] == pytest.approx(0.381966, abs=1e-5) and res.fun == res.trace["error"].min()
     else:
         assert res.nfev > 2 and res.x[0] == pytest.approx(0.45, abs=1e-3)
+
+
+def test_flat_screen_compares_the_start_with_the_first_points(tmp_path):
+    """Brent's first two points straddle the minimum at 0.5 with equal errors, but the start
+    (0.05) is far worse: the data tell it apart, so the search goes on to the minimum
+    instead of keeping the start; with a flat error everywhere it keeps the start after
+    three evaluations (the start first)."""
+    def vee(x):
+        return 10.0 + 50.0 * abs(x[0] - 0.5)
+
+    res = hcal.bounded_fit(vee, "layers", (0.0, 1.0), xatol=1e-4, maxfev=40,
+                           log_path=tmp_path / "v.h5", stop=hcal.flat_screen(3, 0.1), keep=0.05)
+    assert res.trace["layers"].iloc[0] == 0.05 and "not identifiable" not in res.message
+    assert res.x[0] == pytest.approx(0.5, abs=1e-3) and res.fun == res.trace["error"].min()
+    flat = hcal.bounded_fit(lambda x: 10.0 + 1e-4 * x[0], "layers", (0.0, 1.0), xatol=1e-4,
+                            maxfev=40, log_path=tmp_path / "f.h5", stop=hcal.flat_screen(3, 0.1),
+                            keep=0.05)
+    assert flat.nfev == 3 and flat.x[0] == 0.05 and "start value is kept" in flat.message
 
 
 def test_flat_screen_ends_nelder_mead_after_its_first_simplex(tmp_path):
@@ -309,7 +327,7 @@ def test_fit_step_screens_against_the_scatter_of_the_measured_mean(tmp_path, fak
                           "alpha_d": 1.0},
                 "models": {"cwb19_t2_closed": MODEL}, "set": {}}
     fit = hifi_chain.fit_step("mu_rtb", settings, refs, tmp_path / "fit", runner=runner_of(fake))
-    assert (fit["nfev"] == 3) == screened           # the two golden-section points, then the start
+    assert (fit["nfev"] == 3) == screened           # the start, then the two golden-section points
     assert ("not identifiable" in fit["message"]) == screened
     if screened:     # a near tie is no choice: the start value, exactly, and the message says so
         assert fit["parameters"]["mu_rtb"] == 0.2 and "start value is kept" in fit["message"]
@@ -526,15 +544,7 @@ def snakemake(project: Path, *args: str, config=()) -> subprocess.CompletedProce
                           cwd=project, env=env, capture_output=True, text=True)
 
 
-def planned(run: subprocess.CompletedProcess) -> dict[str, int]:
-    """Rule -> job count of a dry run ({} when nothing is to be done)."""
-    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
-    text = run.stdout + run.stderr
-    if "Nothing to be done" in text:
-        return {}
-    table = text.split("Job stats:")[1]
-    return {m.group(1): int(m.group(2)) for m in re.finditer(r"^(\w+)\s+(\d+)\s*$", table, re.M)
-            if m.group(1) != "total"}
+planned = job_stats      # rule -> job count of a dry run (conftest)
 
 
 def planned_wildcards(run: subprocess.CompletedProcess) -> set[str]:
@@ -585,10 +595,11 @@ def project(tmp_path_factory, fake):
 
 def test_hifi_targets_resolve_and_run(project):
     res = project / "results" / "hifi"
-    assert list(pd.read_csv(res / "interface.csv")["parameter"]) == list(hifi_chain.INTERFACE)
+    assert list(pd.read_csv(res / "interface.csv")["parameter"]) == [*hifi_chain.INTERFACE,
+                                                                     *hifi_chain.BUILD]
     assert list(pd.read_csv(res / "crosscheck" / "table3.csv").columns) == ["case", "E", "sigma_y", "K", "n",
                                                                             "reference"]
-    for step in ("mu_rtb", "mu_rtp", "cohesive", "fabric"):
+    for step in ("build", "mu_rtb", "mu_rtp", "cohesive", "fabric"):
         for name in ("fit.json", "curve.csv", "trace.h5", "rejected.jsonl", "fit.png"):
             assert (res / "chain" / step / name).exists()
         # the friction fits (window < 20 mm) end their runs 1 mm past it; the others go to 30
@@ -666,8 +677,8 @@ def test_branch_properties_from_hifi_virtual_tests(project):
 
 
 @pytest.mark.parametrize("in_all, reference, expected", [
-    ("[chain]", "hifi", {"hifi_fit": 4, "hifi_virtual": 9}),
-    ("[chain, crosscheck]", "hifi", {"hifi_fit": 4, "hifi_virtual": 9, "hifi_crosscheck": 5}),
+    ("[chain]", "hifi", {"hifi_fit": 5, "hifi_virtual": 9}),
+    ("[chain, crosscheck]", "hifi", {"hifi_fit": 5, "hifi_virtual": 9, "hifi_crosscheck": 5}),
     ("[]", "measured", {}),
 ])
 def test_all_holds_the_hifi_groups_of_in_all(project, in_all, reference, expected):

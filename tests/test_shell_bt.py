@@ -1,12 +1,12 @@
-"""Belytschko-Lin-Tsay explicit shell (fe/shell_bt.py): rigid motions, membrane patch
+"""Belytschko-Lin-Tsay explicit shell (fe/elements/shell_bt.py): rigid motions, membrane patch
 test, explicit uniaxial J2 tension, cantilever plate, orthotropic eq. 12, stable step."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from harnesspipe.fe import shell_bt as bt
-from harnesspipe.fe.plane_stress import orthotropic_plane_stress_stiffness
+from harnesspipe.fe.elements import shell_bt as bt
+from harnesspipe.fe.materials.plane_stress import orthotropic_plane_stress_stiffness
 
 RHO = 1.0e-9  # tonne/mm^3 (mm, N, MPa, s)
 

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 import harnesspipe  # noqa: F401
-from harnesspipe.fe.static import (ConvergenceError, NewtonSettings, band_lu_solve, constrain_band,
-                                  follow_path)
+from harnesspipe.fe.solvers.static import (ConvergenceError, NewtonSettings, band_lu_solve,
+                                           constrain_band, follow_path)
 
 
 class Springs:

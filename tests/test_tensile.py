@@ -6,7 +6,7 @@ import pytest
 import harnesspipe  # noqa: F401  (sets the Numba cache)
 from harnesspipe.calibrate.tensile import (calibrate_fabric, calibrate_tube, force_error,
                                            linear_region)
-from harnesspipe.fe.hardening import flow_stress
+from harnesspipe.fe.materials.hardening import flow_stress
 from harnesspipe.models.tensile import (FabricGeometry, TubeGeometry, resolution, simulate,
                                         simulate_axisymmetric_tube, simulate_shell_tube)
 
@@ -146,6 +146,7 @@ def test_stage_calibrates_the_shipped_noisy_data(component, tmp_path):
     import math
 
     from conftest import REPO
+
     from harnesspipe import config as cfgmod
     from harnesspipe.data.experimental import read_manifest
     from harnesspipe.data.synthesize import read_truth

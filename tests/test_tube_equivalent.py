@@ -1,5 +1,6 @@
 """Equivalent smooth shell of the ridged tube (models/tube_equivalent.py): the equivalent and
-the resolved (ridged) wall agree in tension and in ring bending on a short segment."""
+the resolved (ridged) wall agree in tension (elastic and into the plastic range) and in ring
+bending on a short segment."""
 from __future__ import annotations
 
 from dataclasses import replace
@@ -11,7 +12,8 @@ from scipy.spatial import cKDTree
 
 from harnesspipe.models.tensile import TubeGeometry, resolution, simulate_axisymmetric_tube
 from harnesspipe.models.tube_equivalent import (equivalent_shell, from_config, ridged_section,
-                                                ring_ovalisation, strip_axial_stiffness)
+                                                ring_ovalisation, strip_axial_stiffness,
+                                                uniaxial_stress)
 from conftest import REPO
 
 CLOSED = dict(E=1559.0, sigma_y=8.6, K=25.6, n=0.12)    # Table 2
@@ -31,10 +33,8 @@ def test_both_conditions_matched():
     assert eq["radius"] == pytest.approx(0.25 * (10.7 + 14.1))
     assert eq["t_contact"] == pytest.approx(1.7)
     assert eq["nu"] == 0.0
-    # plasticity scaled with E_eq / E, n unchanged: same yield strain
-    assert eq["sigma_y"] / eq["E"] == pytest.approx(CLOSED["sigma_y"] / CLOSED["E"])
-    assert eq["K"] / eq["E"] == pytest.approx(CLOSED["K"] / CLOSED["E"])
-    assert eq["n"] == CLOSED["n"]
+    # the corrugated wall yields overall far later than its material
+    assert eq["yield_strain"] > 3.0 * CLOSED["sigma_y"] / CLOSED["E"]
     # the corrugation: axially ~3 % of a smooth wall, hoop bending ~50 x t^3/12
     assert 0.02 < eq["axial_stiffness"] / (CLOSED["E"] * 0.27) < 0.04
     assert 40 < sec["I"] / (0.27 ** 3 / 12) < 70
@@ -52,6 +52,47 @@ def test_tension_equivalent_vs_ridged_axisymmetric():
         F_ridged = float(df["force_N"].iloc[-1])
         F_eq = 2.0 * np.pi * eq["radius"] * eq["t"] * eq["E"] * eps
         assert F_eq == pytest.approx(F_ridged, rel=0.03)
+
+
+@pytest.mark.parametrize("mat", [CLOSED, OPEN], ids=["closed", "open"])
+def test_membrane_law_follows_the_ridged_cell_into_the_plastic_range(mat):
+    """Uniform axial strain to +-12 %: the equivalent's membrane force t_eq sigma(eps) against
+    the ridged axisymmetric cell run independently (finer meridian, other load steps than the
+    fit): within 3 % of the mean of tension and compression from 1 % strain, and each within
+    the cell's own tension-compression asymmetry (an isotropic law is symmetric)."""
+    eq = equivalent_shell(**mat)
+    eps_max, steps = 0.12, 20
+    R = eq["radius"]
+    N = {}
+    for sign in (1, -1):
+        g = replace(TubeGeometry(), extension=sign * eps_max * TubeGeometry().gauge)
+        df = simulate_axisymmetric_tube(mat["E"], mat["sigma_y"], mat["K"], mat["n"], 0.42,
+                                        geometry=g, res=resolution("quick", meridian=48,
+                                                                   n_steps=steps))
+        N[sign] = np.abs(df["force_N"].to_numpy()) / (2.0 * np.pi * R)
+    eps = np.linspace(0.0, eps_max, steps + 1)
+    N_eq = eq["t"] * uniaxial_stress(eps, eq["E"], eq["sigma_y"], eq["K"], eq["n"])
+    mean = 0.5 * (N[1] + N[-1])
+    late = eps >= 0.01
+    assert np.max(np.abs(N_eq[late] / mean[late] - 1.0)) < 0.03
+    half_gap = 0.5 * np.abs(N[1][late] - N[-1][late]) / mean[late]
+    assert np.all(np.abs(N_eq[late] / mean[late] - 1.0) <= half_gap + 0.03)
+    assert N[1][-1] > 1.2 * N[-1][-1]                       # tension stiffer: ridges straighten
+    assert eq["membrane_fit_error"] < 0.03
+
+
+@pytest.mark.parametrize("mat", [CLOSED, OPEN], ids=["closed", "open"])
+def test_hoop_yield_moment_of_the_cell_fitted_law(mat):
+    """First hoop yield moment sigma_y t_eq^2/6 of the equivalent against the ridged wall
+    section's sigma_y I / (A + t/2): the material yield strain scaled by E_eq/E put it 7-10x
+    too low; the cell-fitted law brings it within a factor 3 (closed 0.75x, open 0.39x of the
+    ridged section: one isotropic law cannot match both the axial membrane and the hoop
+    bending yield -- docs/theory/tube_equivalent.md)."""
+    eq = equivalent_shell(**mat)
+    scaled = mat["sigma_y"] * eq["E"] / mat["E"] * eq["t"] ** 2 / 6.0
+    ratio = eq["hoop_yield_moment"] / eq["hoop_yield_moment_ridged"]
+    assert 1.0 / 3.0 < ratio < 1.2
+    assert eq["hoop_yield_moment"] > 2.5 * scaled
 
 
 def test_ring_bending_equivalent_vs_ridged_section():

@@ -1,18 +1,11 @@
 # Stage 8: branching harness, break-out joint damping (Sec. 5, eqs. 14-15).
 
-BRANCH_TESTS = {e.get("load_case"): t for t, e in TESTS.items() if e.get("kind") == "branch"}
-
-
-def branch_settings():
-    b = config["branch"]
-    return json.dumps({k: b[k] for k in ("properties", "properties_source", "geometry", "n_steps", "dt_min",
-                                         "stroke", "rate", "alpha_bounds", "alpha_xatol")}, sort_keys=True)
+BRANCH_TESTS = CATALOGUE.branch_tests(TESTS)
 
 
 # branch.properties_source: hifi -- the beams' E, sigma_y, K, n from eq. 13 + simplex on each
 # case's hi-fi virtual test (rule hifi_virtual_rom), in place of the config's estimates
-BRANCH_HIFI_FITS = ({c: f"{RES}/hifi/virtual/{c}/rom/fit.json" for c in sorted(config["branch"]["properties"])}
-                    if config["branch"]["properties_source"] == "hifi" else {})
+BRANCH_HIFI_FITS = CATALOGUE.branch_property_fits(config, RES)
 BRANCH_PROPS = " ".join(f"{c}={p}" for c, p in BRANCH_HIFI_FITS.items())
 
 BRANCH_CODE = code_hash("harnesspipe.stages.branch", "commands/stage.py")
@@ -35,7 +28,7 @@ rule branch_fit:
     log:
         f"{RES}/logs/branch_fit.log",
     params:
-        settings=branch_settings(),
+        settings=SETTINGS.branch(config),
         code=BRANCH_CODE,
     threads: 1
     shell:
@@ -59,7 +52,7 @@ rule branch_elastic:
     log:
         f"{RES}/logs/branch_elastic.log",
     params:
-        settings=branch_settings(),
+        settings=SETTINGS.branch(config),
         code=BRANCH_CODE,
     shell:
         "{HP} stage branch-predict --reference {input.ref} --settings '{params.settings}' "
@@ -83,7 +76,7 @@ rule branch_validate:
     log:
         f"{RES}/logs/branch_validate.log",
     params:
-        settings=branch_settings(),
+        settings=SETTINGS.branch(config),
         code=BRANCH_CODE,
     shell:
         "{HP} stage branch-predict --reference {input.ref} --settings '{params.settings}' "
@@ -92,29 +85,10 @@ rule branch_validate:
         "--properties-from {BRANCH_PROPS} > {log} 2>&1"
 
 
-if {"inplane", "outofplane"} <= set(BRANCH_TESTS):
-    FITS["branch"] = [f"{RES}/branch/{v}/fit.json" for v in ("inplane", "elastic", "outofplane")]
-    TARGETS.append(f"{RES}/branch/damping.csv")
-
-
 # The hi-fi Y harness beside the ROM (Fig. 18a): one explicit run of the mesoscale model with the
 # tensile stage's coverings and the paper's interface values (config branch.hifi).
 BRANCH_HIFI = config["branch"]["hifi"]
 BRANCH_HIFI_CODE = code_hash("harnesspipe.stages.branch_hifi", "commands/stage.py")
-
-
-def branch_hifi_settings():
-    """The part of the config the hi-fi Y harness reads: both CWB cases' hi-fi models (hifi.smk),
-    the branch geometry and test, branch.hifi."""
-    model = hifi_model("cwb38_t2_open_coarse")
-    model["cases"].update(hifi_model("cwb19_t2_open_coarse")["cases"])
-    b = config["branch"]
-    return json.dumps({
-        "model": model, "geometry": b["geometry"], "stroke": b["stroke"], "rate": b["rate"],
-        "load_case": BRANCH_HIFI["load_case"], "t_total": BRANCH_HIFI["t_total"],
-        "resolution": BRANCH_HIFI["resolution"],
-        "interface": {k: v for k, v in config["paper"]["interface"].items() if k != "E2_over_E1"},
-    }, sort_keys=True)
 
 
 def branch_hifi_order(wc):
@@ -140,7 +114,7 @@ rule branch_hifi:
     log:
         f"{RES}/logs/branch_hifi.log",
     params:
-        settings=lambda wc: branch_hifi_settings(),
+        settings=lambda wc: SETTINGS.branch_hifi(config, PROFILE),
         code=BRANCH_HIFI_CODE,
     threads: 1               # priority 0: the chain's fits, virtual tests and ROM fits (priority 1) go first
     shell:
@@ -152,8 +126,3 @@ rule branch_hifi_all:
     """The hi-fi Y harness in any profile (in `all` for the profiles of branch.hifi.in_all)."""
     input:
         f"{RES}/branch/hifi/summary.json",
-
-
-if config["profile"] in BRANCH_HIFI["in_all"] and "branch" in FITS:
-    TARGETS.append(f"{RES}/branch/hifi/summary.json")
-    REPORT_EXTRA.append(f"{RES}/branch/hifi/summary.json")

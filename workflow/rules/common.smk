@@ -17,10 +17,6 @@ def manifest_tests():
 TESTS = manifest_tests()
 
 
-def tests_of(kind):
-    return sorted(t for t, e in TESTS.items() if e.get("kind") == kind)
-
-
 def sample_files(test_id):
     """CSV files (curves and markers) of one test."""
     files = []

@@ -4,38 +4,17 @@
 #   hifi_chain_all: the Sec. 4.2 calibration chain against the measured means
 #       (mu_rtb -> mu_rtp -> cohesive -> E2/E1) -> results/hifi/interface.csv, then the virtual
 #       test of every case (incl. hifi.extra_cases) at the fitted interface.
-# `all` includes the groups named in hifi.pipeline.in_all (chain: 33 min at the default
-# profile on 2 cores, 10 min at quick; crosscheck: 5 more runs).
+# `all` includes the groups named in hifi.pipeline.in_all (stages/targets.py; chain: 33 min at
+# the default profile on 2 cores, 10 min at quick; crosscheck: 5 more runs).
 # Every virtual test is one thread, so two run side by side; a fit step takes its HIFI_STEPS cores.
 
 from harnesspipe.stages import chain_settings as CHAIN
 
-HIFI = config["hifi"]["pipeline"]
 HIFI_CASES = CHAIN.cases(config)
-HIFI_CROSSCHECK = sorted(c for c in config["paper"]["table3"] if c in config["cases"])
+HIFI_CROSSCHECK = CATALOGUE.crosscheck_cases(config)
 HIFI_MEASURED = {e["item"]: t for t, e in sorted(TESTS.items()) if e.get("kind") == "three_point"}
 HIFI_STEPS = CHAIN.STEPS        # the chain of Sec. 4.2 and its cores (stages/chain_settings.py)
 CHAIN.check_windows(config)
-
-
-def hifi_fabric(case):
-    return CHAIN.is_fabric(config, case)
-
-
-def hifi_model(case, paper_coverings=False):
-    return CHAIN.model(config, case, PROFILE, paper_coverings)
-
-
-def hifi_run_settings(case, crosscheck):
-    return CHAIN.run_settings(config, case, PROFILE, crosscheck)
-
-
-def hifi_fit_settings(step):
-    return CHAIN.fit_settings(config, step, PROFILE)
-
-
-def hifi_rom_settings(case):
-    return json.dumps({**json.loads(rom_settings(case)), "reference": "hifi"}, sort_keys=True)
 
 
 def hifi_prepared(case):
@@ -52,7 +31,7 @@ def hifi_fit_inputs(wc):
 
 def hifi_interface_step(case):
     """The chain step whose fit.json holds the interface a virtual test of ``case`` uses."""
-    return "fabric" if hifi_fabric(case) else "cohesive"
+    return "fabric" if CHAIN.is_fabric(config, case) else "cohesive"
 
 
 def hifi_reuse(case):
@@ -72,21 +51,6 @@ def hifi_virtual_inputs(wc):
     return inputs
 
 
-def hifi_virtual_priority(wc):
-    """Longest virtual test first (so the last one to finish is a short one): 1 plus the run's
-    cost in wire-steps (wires x t_total_scale) / 1000, below the chain's 10; a reused run is 1."""
-    if hifi_reuse(wc.case):
-        return 1.0
-    case = HIFI_CASES[wc.case]
-    return 1.0 + sum(case["wires"].values()) * case.get("t_total_scale", 1.0) / 1000.0
-
-
-def hifi_role(case):
-    if case in CHAIN.VALIDATION:
-        return "validation"
-    return "calibration" if case in CHAIN.CALIBRATED else "prediction"
-
-
 HIFI_CODE = code_hash("harnesspipe.stages.hifi_chain", "commands/stage.py")
 
 
@@ -101,7 +65,7 @@ rule hifi_crosscheck:
     log:
         f"{RES}/logs/hifi_crosscheck_{{case}}.log",
     params:
-        settings=lambda wc: hifi_run_settings(wc.case, crosscheck=True),
+        settings=lambda wc: CHAIN.run_settings(config, wc.case, PROFILE, crosscheck=True),
         code=HIFI_CODE,
     wildcard_constraints:
         case="|".join(HIFI_CROSSCHECK) or "none^",
@@ -125,7 +89,7 @@ rule hifi_crosscheck_rom:
     log:
         f"{RES}/logs/hifi_crosscheck_rom_{{case}}.log",
     params:
-        settings=lambda wc: hifi_rom_settings(wc.case),
+        settings=lambda wc: SETTINGS.rom_on_hifi(config, PROFILE, wc.case),
         code=HIFI_CODE,
     wildcard_constraints:
         case="|".join(HIFI_CROSSCHECK) or "none^",
@@ -163,7 +127,7 @@ rule hifi_fit:
     log:
         f"{RES}/logs/hifi_fit_{{step}}.log",
     params:
-        settings=lambda wc: hifi_fit_settings(wc.step),
+        settings=lambda wc: CHAIN.fit_settings(config, wc.step, PROFILE),
         refs=lambda wc: " ".join(f"{c}={hifi_prepared(c)}" for c in HIFI_STEPS[wc.step]["cases"]),
         code=HIFI_CODE,
     wildcard_constraints:
@@ -201,15 +165,15 @@ rule hifi_virtual:
     log:
         f"{RES}/logs/hifi_virtual_{{case}}.log",
     params:
-        settings=lambda wc: hifi_run_settings(wc.case, crosscheck=False),
+        settings=lambda wc: CHAIN.run_settings(config, wc.case, PROFILE, crosscheck=False),
         ref=lambda wc, input: f"--reference {input.ref}" if "ref" in input.keys() else "",
-        role=lambda wc: hifi_role(wc.case),
+        role=lambda wc: CHAIN.role(wc.case),
         reuse=lambda wc: hifi_reuse(wc.case),
         code=HIFI_CODE,
     wildcard_constraints:
         case="|".join(sorted(HIFI_CASES)),
     threads: 1
-    priority: hifi_virtual_priority
+    priority: lambda wc: CHAIN.virtual_priority(config, wc.case, bool(hifi_reuse(wc.case)))
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage hifi-run --case {wildcards.case} --role {params.role} "
         "--settings '{params.settings}' --coverings {input.table2} --interface {input.interface} "
@@ -230,7 +194,7 @@ rule hifi_virtual_rom:
     log:
         f"{RES}/logs/hifi_virtual_rom_{{case}}.log",
     params:
-        settings=lambda wc: hifi_rom_settings(wc.case),
+        settings=lambda wc: SETTINGS.rom_on_hifi(config, PROFILE, wc.case),
         code=HIFI_CODE,
     wildcard_constraints:
         case="|".join(sorted(HIFI_CASES)),
@@ -241,28 +205,13 @@ rule hifi_virtual_rom:
         "--outdir {RES}/hifi/virtual/{wildcards.case}/rom > {log} 2>&1"
 
 
-HIFI_CROSSCHECK_TARGETS = [f"{RES}/hifi/crosscheck/table3.csv"] + [
-    f"{RES}/hifi/crosscheck/{c}/summary.json" for c in HIFI_CROSSCHECK]
-HIFI_CHAIN_TARGETS = [f"{RES}/hifi/interface.csv"] + [
-    f"{RES}/hifi/virtual/{c}/summary.json" for c in sorted(HIFI_CASES)]
-
-
 rule hifi_crosscheck_all:
     """Table 3 from hi-fi runs at the paper's values (in `all` when hifi.pipeline.in_all names crosscheck)."""
     input:
-        HIFI_CROSSCHECK_TARGETS,
+        CATALOGUE.crosscheck_targets(config, RES),
 
 
 rule hifi_chain_all:
     """The Sec. 4.2 calibration chain and the virtual tests (in `all` when hifi.pipeline.in_all names chain)."""
     input:
-        HIFI_CHAIN_TARGETS,
-
-
-if "crosscheck" in HIFI["in_all"]:
-    TARGETS.extend(HIFI_CROSSCHECK_TARGETS)
-    FITS["hifi"] = FITS.get("hifi", []) + HIFI_CROSSCHECK_TARGETS
-if "chain" in HIFI["in_all"]:
-    # the report lists the hi-fi results; as its inputs it is built after them
-    TARGETS.extend(HIFI_CHAIN_TARGETS)
-    FITS["hifi"] = FITS.get("hifi", []) + HIFI_CHAIN_TARGETS
+        CATALOGUE.chain_targets(config, RES),

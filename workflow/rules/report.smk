@@ -14,9 +14,7 @@ rule effective_config:
         Path(log[0]).write_text(f"wrote {output[0]} (profile {config['profile']})\n")
 
 
-def report_fits():
-    """stage=fit.json arguments of every fitting stage included in the workflow."""
-    return [f"{stage}={path}" for stage, paths in FITS.items() for path in paths]
+REPORT_FITS = CATALOGUE.stage_fits(config, TESTS, RES)
 
 
 rule report:
@@ -25,14 +23,14 @@ rule report:
         config=f"{RES}/config.yaml",
         check=f"{RES}/data/check.txt",
         prepared=[f"{RES}/data/{t}.h5" for t in sorted(TESTS)],
-        fits=[p for paths in FITS.values() for p in paths],
-        extra=REPORT_EXTRA,
+        fits=[p for paths in REPORT_FITS.values() for p in paths],
+        extra=CATALOGUE.report_extra(config, TESTS, RES),
     output:
         report(f"{RES}/report/index.html", caption="../report/index.rst", category="Report"),
     log:
         f"{RES}/logs/report.log",
     params:
-        fits=report_fits(),
+        fits=CATALOGUE.report_fit_args(REPORT_FITS),
         code=code_hash("harnesspipe.report.html", "commands/report.py"),
     shell:
         "{HP} report --config {input.config} --results {RES} --check {input.check} "

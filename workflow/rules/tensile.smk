@@ -1,22 +1,5 @@
 # Stage 2: component tensile fits (Sec. 3.2): results/tensile/table2.csv.
 
-TENSILE_COMPONENTS = sorted(e["item"] for e in TESTS.values() if e.get("kind") == "tensile")
-
-
-def tensile_settings(component):
-    cov = config["coverings"][component]
-    material = cov["material"]
-    guess = config["tensile"]["initial_guess"][material]
-    return json.dumps({
-        "preset": PROFILE["tensile"]["preset"],
-        "nu": config["materials"][material]["nu"],
-        "pitch": cov.get("pitch"),
-        "initial": guess,
-        "maxfev": PROFILE["simplex_maxfev"],
-        **config["tensile"]["simplex"],
-    }, sort_keys=True)
-
-
 rule tensile_fit:
     """Nelder-Mead on the tensile model (tubes), eq. 3 + Nelder-Mead (fabric)."""
     input:
@@ -31,7 +14,7 @@ rule tensile_fit:
     log:
         f"{RES}/logs/tensile_fit_{{component}}.log",
     params:
-        settings=lambda wc: tensile_settings(wc.component),
+        settings=lambda wc: SETTINGS.tensile(config, PROFILE, wc.component),
         code=code_hash("harnesspipe.stages.tensile", "commands/stage.py"),
     wildcard_constraints:
         component="closed_tube|open_tube|fabric_tube",
@@ -45,7 +28,7 @@ rule tensile_fit:
 rule table2:
     """Table 2 across the coverings: results/tensile/table2.csv (component,E,sigma_y,K,n)."""
     input:
-        [f"{RES}/tensile/{c}/fit.json" for c in TENSILE_COMPONENTS],
+        CATALOGUE.tensile_fits(TESTS, RES),
     output:
         f"{RES}/tensile/table2.csv",
     log:
@@ -54,8 +37,3 @@ rule table2:
         code=code_hash("harnesspipe.stages.tensile", "commands/stage.py"),
     shell:
         "{HP} stage table2 --fits {input} --out {output} > {log} 2>&1"
-
-
-if TENSILE_COMPONENTS:
-    FITS["tensile"] = [f"{RES}/tensile/{c}/fit.json" for c in TENSILE_COMPONENTS]
-    TARGETS.append(f"{RES}/tensile/table2.csv")

@@ -24,8 +24,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from harnesspipe.calibrate.objective import l2_error, on_grid
-from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, check_stop,
-                                          logged_call, nelder_mead, stopped_at)
+from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, best_logged,
+                                           check_stop, logged_call, nelder_mead, stopped_at)
 
 REJECT_FACTOR = 10.0
 #: a simulated curve may end this fraction of the window's end short of it (the feeder stops
@@ -170,7 +170,10 @@ def read_rejected(path: Path, key: str | None = None) -> list[dict]:
 def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, key="",
                 maxfev: int = 30, stop=None, keep: float | None = None) -> FitResult:
     """Brent's bounded search for one parameter, every evaluation logged (and replayed).
-    ``stop``, ``keep``: as in :func:`harnesspipe.calibrate.simplex.nelder_mead`."""
+    ``stop``, ``keep``: as in :func:`harnesspipe.calibrate.simplex.nelder_mead`.  With
+    both, the start value ``keep`` is evaluated first, so that the stop rule compares it
+    with Brent's first points (a start the data tell apart from them is no near tie), and
+    the result is the best logged point."""
     log = EvaluationLog(log_path, [name], key)
 
     def wrapped(c):
@@ -179,9 +182,13 @@ def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, ke
         return err
 
     try:
+        if stop is not None and keep is not None:
+            wrapped(keep)
         res = minimize_scalar(wrapped, bounds=tuple(bounds), method="bounded",
                               options={"xatol": xatol, "maxiter": maxfev})
         x, fun, converged, message = [res.x], float(res.fun), bool(res.success), str(res.message)
+        if stop is not None and keep is not None:
+            x, fun = best_logged(log)
     except StopSearch as reason:
         x, fun, kept = stopped_at(log, objective, None if keep is None else [keep])
         converged, message = False, f"{reason}; {kept}"
@@ -202,8 +209,8 @@ def simplex_fit(objective, x0: dict, *, xatol: float, fatol: float, maxfev: int,
 def flat_screen(n_first: int, floor: float, penalty: float = np.inf):
     """Identifiability screen, a ``stop`` rule for the searches above.
 
-    Once the search has made its first ``n_first`` evaluations -- Brent's two
-    golden-section points (2), or the +5 % simplex (number of parameters + 1) -- it
+    Once the search has made its first ``n_first`` evaluations -- the start and Brent's
+    two golden-section points (3), or the +5 % simplex (number of parameters + 1) -- it
     ends the search if their errors (eq. 4) differ by less than ``floor``: the l2 norm,
     over the fit's window, of the standard error of the measured mean (summed over the
     cases like the error).  Parameters whose effect on the error stays within the

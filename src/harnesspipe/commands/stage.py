@@ -20,6 +20,14 @@ def _settings(text: str) -> dict:
     return value
 
 
+
+def _collector(ssub, name: str, text: str, func) -> None:
+    """A subcommand that collects fit.json files (``--fits``) into one table (``--out``)."""
+    p = ssub.add_parser(name, help=text)
+    p.add_argument("--fits", type=Path, nargs="+", required=True)
+    p.add_argument("--out", type=Path, required=True)
+    p.set_defaults(func=func)
+
 def register(sub) -> None:
     stage = sub.add_parser("stage", help="pipeline stage steps (called by the Snakemake rules)")
     ssub = stage.add_subparsers(dest="stage_command", required=True, metavar="STEP")
@@ -66,15 +74,9 @@ def register(sub) -> None:
     p.add_argument("--outdir", type=Path, required=True)
     p.set_defaults(func=_tensile_fit)
 
-    p = ssub.add_parser("table2", help="collect tensile fits into table2.csv")
-    p.add_argument("--fits", type=Path, nargs="+", required=True)
-    p.add_argument("--out", type=Path, required=True)
-    p.set_defaults(func=_table2)
+    _collector(ssub, "table2", "collect tensile fits into table2.csv", _table2)
 
-    p = ssub.add_parser("table3", help="collect ROM fits into table3.csv")
-    p.add_argument("--fits", type=Path, nargs="+", required=True)
-    p.add_argument("--out", type=Path, required=True)
-    p.set_defaults(func=_table3)
+    _collector(ssub, "table3", "collect ROM fits into table3.csv", _table3)
 
     p = ssub.add_parser("hifi-run", help="one hi-fi virtual three-point test of a case (Sec. 4.1)")
     p.add_argument("--case", required=True)
@@ -109,10 +111,7 @@ def register(sub) -> None:
     p.add_argument("--outdir", type=Path, required=True)
     p.set_defaults(func=_hifi_fit)
 
-    p = ssub.add_parser("hifi-interface", help="collect the chain fits into interface.csv")
-    p.add_argument("--fits", type=Path, nargs="+", required=True)
-    p.add_argument("--out", type=Path, required=True)
-    p.set_defaults(func=_hifi_interface)
+    _collector(ssub, "hifi-interface", "collect the chain fits into interface.csv", _hifi_interface)
 
     p = ssub.add_parser("hifi-rom", help="eq. 13 + simplex on a hi-fi curve (Table 3 cross-check)")
     p.add_argument("--case", required=True)

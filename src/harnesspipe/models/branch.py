@@ -1,51 +1,11 @@
 """Reduced-order model of the Y-shaped branching harness (Sec. 2.3 and 5, Fig. 16, eqs. 14-15).
 
-Physical time, implicit dynamics (Newmark, :mod:`harnesspipe.fe.newmark_band`).
+CWB and TWB portions are co-rotational fibre beams with effective eq. 2 properties; the
+break-out joint is three 6-dof bushings with the eq. 14 stiffnesses (lambda = l / r) and
+Kelvin-Voigt damping C = alpha K (eq. 15); the strand is a truss, and the force is its
+tension.  Implicit Newmark dynamics in physical time (:mod:`harnesspipe.fe.solvers.newmark`).
 
-Parts (Fig. 16; lengths in mm):
-
-* S1: 38 type-2 wires in the 15 mm open coarse-taped tube, CWB length L1 = 140;
-* S2, S3: 19 type-2 wires each in 10 mm open tubes, CWB lengths L2 = 203, L3 = 111,
-  30 deg apart; S2 ends in its taped wire end (TWB) of length Le = 38;
-* the break-out joint: three TWB portions l1 = 13 (38 wires), l2 = l3 = 30 (19 wires)
-  meet at the branch point.  Each is a 6-dof bushing connector from the branch point
-  to its CWB (Sec. 5: "connector elements ... represent TWBs"), with the eq. 14
-  stiffnesses of that TWB (lambda = l / r) and Kelvin-Voigt damping C = alpha K
-  (eq. 15) -- the only damping of the model;
-* the aramid strand H = 625 from the S2 tip to the crosshead: a truss of E 70 GPa,
-  1 mm diameter (assumption: a typical aramid cord; EA/H = 88 N/mm, some 10^4 times
-  the harness stiffness, i.e. "nearly rigid");
-* CWB and TWB portions: co-rotational fibre beams with effective eq. 2 properties
-  (``properties``: one dict ``E, sigma_y, K, n, radius`` per case, see
-  :data:`DEFAULT_PROPERTIES`).
-
-Geometry choices where Fig. 16 is not explicit (assumptions):
-
-* harness plane x-y, branch point at the origin; S1 along -x and S2 along +x (the main
-  line continues into S2, the horizontal branch that is pulled); S3 leaves at -30 deg;
-* zip-ties clamp S1 and S3 at the far ends of their CWB portions (distances l1 + L1 and
-  l3 + L3 from the branch point); the TWB tails beyond the ties carry no load and are
-  not modelled;
-* the strand is attached at the S2 tip (end of its TWB) and hangs from the crosshead
-  H above it; ``inplane``: the crosshead sits above the tip along +y (in the harness
-  plane, the side away from S3) and moves +y; ``outofplane`` (Fig. 20): along +z;
-* gravity off: the load cell is zeroed with the harness hanging in the fixture, and the
-  curve is the response to the pull alone.
-
-Mass: lumped, from the wires only, rho_wire (type 2, 4.34e-9 t/mm^3) times the fill
-fraction N (r_w / r)^2 of the effective circular section (tube and tape neglected); the
-rotary inertia rho I_p l / 2 per node about every axis.  The branch point is massless.
-
-The force is the strand tension (the load cell is in line with the strand).
-
-Size of the alpha effect.  Under a constant pull rate v the Kelvin-Voigt joint carries a
-steady viscous force, so the curve with alpha > 0 lies above the elastic-joint curve by
-about the force of a travel alpha v times the joint's share of the compliance (at most
-alpha v: 0.2 mm at 1 mm/s).  With the default properties that is +0.18 mN throughout,
-i.e. +17 % at 1 mm, +3 % at 5 mm, +1.7 % at 10 mm, +0.3 % at 50 mm (bench/RESULTS.md):
-visible early, small later.  A mismatch up to u = 10 mm as in the paper's Fig. 18a needs
-alpha v ~ 10 mm, i.e. the 50 mm pulled in about 1 s of analysis time (then the offset is
-~17 % at 50 mm and the start is dominated by inertia), or alpha ~ 10 s at 1 mm/s.
+Theory: docs/theory/branch_rom.md (parts, geometry assumptions, mass, size of the alpha effect).
 """
 from __future__ import annotations
 
@@ -55,14 +15,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from harnesspipe.fe.beam import NDOF_NODE, assemble_beams, initial_frames, lobatto_points
-from harnesspipe.fe.branch_kernels import bushing_response, scatter_pair, truss_response
-from harnesspipe.fe.connector import bushing_stiffness
-from harnesspipe.fe.fiber import disc_fibres
-from harnesspipe.fe.newmark_band import NewmarkSettings, integrate, time_grid
+from harnesspipe.fe.assembly.band import scatter_pair
+from harnesspipe.fe.elements.beam import NDOF_NODE, assemble_beams, initial_frames, lobatto_points
+from harnesspipe.fe.elements.bushing import bushing_response, bushing_stiffness
+from harnesspipe.fe.elements.truss import truss_response
+from harnesspipe.fe.materials.fiber import disc_fibres
 from harnesspipe.fe.rotation import rotate_nodes
+from harnesspipe.fe.solvers.newmark import NewmarkSettings, integrate, time_grid
 from harnesspipe.models.rom_beam import Material
-
 
 
 @dataclass(frozen=True)
@@ -98,7 +58,7 @@ LOAD_CASES = {"inplane": np.array([0.0, 1.0, 0.0]), "outofplane": np.array([0.0,
 
 WIRES = {"cwb38_t2_open_coarse": 38, "cwb19_t2_open_coarse": 19, "twb38_t2": 38, "twb19_t2": 19}
 
-# Documented estimates until the ROM stage supplies fitted values (DESIGN sec. 3 case names):
+# Documented estimates, overridden by the caller's fitted properties (DESIGN sec. 3 case names):
 # * cwb19_t2_open_coarse: Table 3 (coarse-taped open tube), r_o = 7.05 (the 10 mm tube is the
 #   nominal size of the d_i 10.7 / d_o 14.1 tube of the CWB tests);
 # * cwb38_t2_open_coarse: 15 mm nominal tube read as d_i 15, d_o 18.4 (same wall and ridge as
@@ -159,7 +119,7 @@ def _chain(start, direction, lengths, size):
 
 
 def build_layout(load_case: str, element_size: float, geometry: Geometry = Geometry()) -> Layout:
-    """Node coordinates and connectivity of Fig. 16 (see the module docstring).
+    """Node coordinates and connectivity of Fig. 16 (docs/theory/branch_rom.md).
 
     Node order keeps the tangent banded: S1 from its zip-tie to the joint, the branch
     point, then S2 and S3 interleaved from the joint outwards, the crosshead last.
@@ -215,7 +175,7 @@ class _Beams:
 
 
 class YHarness:
-    """The Y-harness ROM as a problem of :func:`harnesspipe.fe.newmark_band.integrate`."""
+    """The Y-harness ROM as a problem of :func:`harnesspipe.fe.solvers.newmark.integrate`."""
 
     def __init__(self, layout: Layout, properties: dict, alpha: float, pull, mesh: BranchMesh):
         self.layout = layout

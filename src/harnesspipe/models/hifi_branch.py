@@ -45,18 +45,18 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from harnesspipe.fe.dynamics import DynamicsSettings, integrate
-from harnesspipe.fe.explicit import smooth_step
+from harnesspipe.fe.solvers.central_difference import DynamicsSettings, integrate, smooth_step
 from harnesspipe.models import hifi_mesh as hm
 from harnesspipe.models.branch import LOAD_CASES, Geometry
-from harnesspipe.models.hifi import BundleSystem, HifiInputs, quasi_static_ratio, shell_materials
+from harnesspipe.models.hifi_bundle import (BundleSystem, HifiInputs, quasi_static_ratio,
+                                            shell_materials)
 
 Z = np.array([0.0, 0.0, 1.0])
 
 
 @dataclass
 class YMesh:
-    """The merged mesh (the attributes :class:`harnesspipe.models.hifi.BundleSystem` reads)."""
+    """The merged mesh (the attributes :class:`harnesspipe.models.hifi_bundle.BundleSystem` reads)."""
 
     X: np.ndarray
     beam_conn: np.ndarray
@@ -269,7 +269,7 @@ def _merge(pieces, spec, n_bridge, clamp_width) -> YMesh:
 
 class YSystem(BundleSystem):
     """The hi-fi Y harness under the strand pull; the system protocol of
-    :mod:`harnesspipe.fe.dynamics`.  The strand's force on the tip nodes is the driven
+    :mod:`harnesspipe.fe.solvers.central_difference`.  The strand's force on the tip nodes is the driven
     family ``pin_contact`` (its elastic energy is credited by the crosshead's work).
 
     The nodal mass factor may reach 64 (three-point model: 16): the corner nodes of the
@@ -369,7 +369,7 @@ def pull(inp: HifiInputs, geometry: Geometry, load_case: str, stroke: float = 50
     """Run the hi-fi pull test; raises ExplicitError when the run goes unstable or, with
     ``reject``, is not quasi-static (``config.explicit.ke_ie_fail``) or its energy balance
     fails."""
-    from harnesspipe.fe.explicit import ExplicitError
+    from harnesspipe.fe.solvers.central_difference import ExplicitError
     t0 = time.perf_counter()
     if load_case not in LOAD_CASES:
         raise ValueError(f"load case {load_case!r}: expected one of {sorted(LOAD_CASES)}")

@@ -8,11 +8,11 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from harnesspipe.fe.beam import initial_frames, lobatto_points
-from harnesspipe.fe.beam_explicit import (beam_forces, beam_lumped_mass, beam_plastic_work,
-                                          beam_stable_step)
-from harnesspipe.fe.explicit import smooth_step
-from harnesspipe.fe.fiber import disc_fibres
+from harnesspipe.fe.elements.beam import initial_frames, lobatto_points
+from harnesspipe.fe.elements.beam_explicit import (beam_forces, beam_lumped_mass, beam_plastic_work,
+                                                   beam_stable_step)
+from harnesspipe.fe.materials.fiber import disc_fibres
+from harnesspipe.fe.solvers.central_difference import smooth_step
 
 
 class Wires:

@@ -2,9 +2,9 @@
 
 The bundle is one effective elastoplastic beam (eq. 2 hardening, J2 fibres) of a
 solid circular section of the outer radius r_o (I = pi r_o^4 / 4, the reading of
-eq. 13), discretised by co-rotational fibre beams (:mod:`harnesspipe.fe.beam`).
+eq. 13), discretised by co-rotational fibre beams (:mod:`harnesspipe.fe.elements.beam`).
 :class:`BeamSystem` holds the state and the loading and is the problem driven by
-:func:`harnesspipe.fe.static.follow_path`; the builders below set up each test.
+:func:`harnesspipe.fe.solvers.static.follow_path`; the builders below set up each test.
 
 Three-point bending with ``supports="rollers"``: the 200 mm sample lies on two rigid
 5 mm roller pins at +-span/2 and a 5 mm loading pin at midspan is pushed down, all in
@@ -23,12 +23,12 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from harnesspipe.fe.beam import (NDOF_NODE, assemble_beams, band_width, initial_frames,
-                                 lobatto_points)
-from harnesspipe.fe.contact import assemble_contact
-from harnesspipe.fe.fiber import disc_fibres
+from harnesspipe.fe.contact.beam_cylinder import assemble_contact
+from harnesspipe.fe.elements.beam import (NDOF_NODE, assemble_beams, band_width, initial_frames,
+                                          lobatto_points)
+from harnesspipe.fe.materials.fiber import disc_fibres
 from harnesspipe.fe.rotation import in_plane_angle, rotate_nodes
-from harnesspipe.fe.static import NewtonSettings, band_matvec, constrain_band, follow_path
+from harnesspipe.fe.solvers.static import NewtonSettings, band_matvec, constrain_band, follow_path
 
 PIN_RADIUS = 2.5        # roller and loading pins, 5 mm diameter (Sec. 2.2)
 PENALTY_FACTOR = 1.0    # contact stiffness / transverse stiffness 12 EI / h^3 of one element
@@ -86,7 +86,7 @@ class Cylinders:
 class BeamSystem:
     """A chain of co-rotational fibre beams with supports, loads and contacts.
 
-    Implements the problem interface of :mod:`harnesspipe.fe.static`.  ``fixed`` holds
+    Implements the problem interface of :mod:`harnesspipe.fe.solvers.static`.  ``fixed`` holds
     the constrained dof numbers (node * 6 + component); ``prescribed`` maps some of
     them to their final value (translations only); ``load`` is the final external
     force vector; everything is scaled by the load factor.

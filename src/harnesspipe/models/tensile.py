@@ -11,7 +11,7 @@ Components (DESIGN.md section 5 names):
     or driven, no rotation), represents it exactly away from the grips: the
     half-gauge elongation U maps to U * (pitch/2) / (gauge/2) on the cell and the
     force is the cell's axial reaction.  Default model: axisymmetric shell
-    (:mod:`harnesspipe.fe.shell_axisym`); ``model="shell3d"`` runs the same cell
+    (:mod:`harnesspipe.fe.elements.shell_axisym`); ``model="shell3d"`` runs the same cell
     with the 4-node 3D shell on half the circumference (used to verify it).
 ``open_tube``
     The same tube with a longitudinal cut.  ``model="shell3d"``: 3D shell cell
@@ -41,9 +41,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from harnesspipe.fe.shell import DOF_PER_NODE, Shell
-from harnesspipe.fe.shell_axisym import AxisymShell
-from harnesspipe.fe.shell_static import Controls, solve
+from harnesspipe.fe.elements.shell import DOF_PER_NODE, Shell
+from harnesspipe.fe.elements.shell_axisym import AxisymShell
+from harnesspipe.fe.solvers.static_dense import Controls, solve
 
 COMPONENTS = ("closed_tube", "open_tube", "fabric_tube")
 POISSON = {"closed_tube": 0.42, "open_tube": 0.42, "fabric_tube": 0.4}  # PP, polyester (Sec. 3.2)

@@ -1,56 +1,13 @@
 """Equivalent smooth shell of the ridged (corrugated) plastic tube for the hi-fi models.
 
-The tensile stage resolves the corrugation (:class:`~harnesspipe.models.tensile.TubeGeometry`:
-sinusoidal mid-surface between the trough radius ``d_i/2 + t/2`` and the crest radius
-``d_o/2 - t/2``, wall ``t``, pitch 3 mm).  In the three-point bending models the
-corrugation pitch is far below any affordable explicit element size, so the tube is
-meshed as a *smooth* cylinder (:mod:`harnesspipe.models.hifi_mesh`) and given the
-properties returned by :func:`equivalent_shell`.
+An isotropic J2 shell with the ridged wall's axial membrane stiffness k_ax and hoop
+bending stiffness D_h = E I_w: t_eq = sqrt(12 D_h / k_ax), E_eq = k_ax / t_eq, nu 0.  Its
+hardening law (eq. 2) is fitted to the ridged cell's axial membrane law N(eps), the mean
+of tension and compression up to CELL_STRAIN (:func:`cell_membrane_law`); rho_eq keeps
+the mass per unit area.  t_eq is a section thickness, not a geometry (contact:
+t_contact = (d_o - d_i)/2), and the hoop membrane stiffness is ~50 x too soft.
 
-Homogenisation (per unit length / unit circumference of the mean cylinder of radius
-``R = (r_trough + r_crest)/2 = (d_i + d_o)/4``):
-
-(a) axial membrane stiffness ``k_ax = N / eps`` (N/mm per unit strain) of the ridged wall.
-    Computed with the same axisymmetric shell the tensile stage uses
-    (:func:`~harnesspipe.models.tensile.simulate_axisymmetric_tube`, elastic, strain 1e-5):
-    ``k_ax = F / (2 pi R eps)``.  For the default geometry ``k_ax = 0.029 E t``: the
-    corrugated wall stretches by unbending its ridges.  A closed form for comparison
-    (:func:`strip_axial_stiffness`, Castigliano on a corrugated plane-strain strip) neglects
-    the hoop restraint of the axisymmetric wall and is ~20 % softer (0.023 E t).
-(b) hoop bending stiffness ``D_h = E I_w`` (N mm per unit length) of the ridged wall section
-    for ring ovalisation, ``I_w`` the second moment of the corrugated wall section about the
-    mean radius per unit axial length (:func:`ridged_section`, exact polygon integration of
-    the wall region; ~ t A^2/2 x arc factor, ``A = (r_crest - r_trough)/2``): 54 x ``t^3/12``.
-
-An isotropic shell with ``E_eq t_eq = k_ax`` and ``E_eq t_eq^3 / 12 = D_h`` matches both:
-``t_eq = sqrt(12 D_h / k_ax)``, ``E_eq = k_ax / t_eq``.  The equivalent Poisson ratio is 0:
-the corrugated wall has almost no axial-hoop coupling, and with nu = 0 the plate
-(plane-strain) and ring (plane-stress) bending stiffnesses coincide, so (b) is matched
-whichever the shell element sees.  Plasticity: ``sigma_y`` and ``K`` scaled by ``E_eq/E``,
-``n`` unchanged, i.e. the equivalent yields at the material's yield strain.  Mass: ``rho_eq``
-keeps the ridged wall's mass per unit area (``rho t arc/pitch``).
-
-What the equivalent shell CANNOT represent (read before using it):
-
-* ``t_eq`` is a *section* thickness only, 11.6 mm for the default tube (larger than the
-  mid radius 6.2 mm!) with ``E_eq = 6.8e-4 E``.  It must not be used as a geometric/contact
-  thickness: the contact envelope of the ridged tube is the mid radius ``R`` +-
-  ``t_contact/2``, ``t_contact = (d_o-d_i)/2`` (inner face d_i/2, outer face d_o/2), returned as ``t_contact`` and used by the mesh.  A
-  shell element with t_eq/R > 1 still integrates ``E t^3/12`` in bending but thin-shell
-  curvature and transverse-shear corrections are meaningless at that ratio; the
-  homogenisation is a stiffness fit, not a geometry.
-* Hoop membrane stiffness becomes ``E_eq t_eq = k_ax``, the (soft) axial value, whereas the
-  ridged wall is ~50 x stiffer in hoop membrane (``hoop_membrane_ratio``).  Loads carried by
-  hoop tension/compression (internal pressure from wires pushed against the tube wall over
-  a large arc) are therefore too soft; ovalisation under line loads is bending-dominated and
-  is matched.  An orthotropic shell would fix this (E_hoop/E_axial ~ 50).
-* Local ridge buckling/crushing, ridge-by-ridge contact (rollers sitting between crests),
-  friction on a corrugated surface and the plastic hinge pattern of the corrugation are not
-  represented.  Axial and hoop bending plasticity share one yield strain (the ridged wall
-  first yields, at the ridge, at a different overall strain: ``first_yield_strain_ratio``).
-* Axial *bending* of the wall itself (local kink of the tube wall, wavelength ~ sqrt(R t))
-  gets ``E_eq t_eq^3/12`` = the hoop value; for the ridged wall it is lower.  Global beam
-  bending of the tube is governed by (a) and is matched.
+Theory and limits: docs/theory/tube_equivalent.md.
 """
 from __future__ import annotations
 
@@ -58,13 +15,17 @@ from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
+from scipy.optimize import brentq, least_squares
 
 from harnesspipe.models.tensile import TubeGeometry, resolution, simulate_axisymmetric_tube
 
 __all__ = ["equivalent_shell", "ridged_section", "strip_axial_stiffness", "axial_stiffness_fe",
-           "ring_ovalisation", "from_config"]
+           "cell_membrane_law", "uniaxial_stress", "ring_ovalisation", "from_config"]
 
 RING_OVALISATION = 0.149  # diametral line load on a ring: delta = 0.149 P R^3 / (E I)
+CELL_STRAIN = 0.12        # the membrane law is fitted over |eps| <= 12 % (the wall's range in the test)
+CELL_STEPS = 48           # load steps of the cell to CELL_STRAIN (a point every 0.25 %)
+CELL_MERIDIAN = 32        # elements on the cell's half-pitch meridian (the tensile stage's default)
 
 
 def ridged_section(geometry: TubeGeometry = TubeGeometry(), n: int = 4001) -> dict:
@@ -140,6 +101,57 @@ def axial_stiffness_fe(E: float, nu: float, geometry: TubeGeometry = TubeGeometr
     return E * _unit_axial_stiffness(geometry, float(nu), int(meridian), float(strain))
 
 
+@lru_cache(maxsize=32)
+def cell_membrane_law(E: float, sigma_y: float, K: float, n: float, nu: float,
+                      geometry: TubeGeometry = TubeGeometry(), strain: float = CELL_STRAIN,
+                      n_steps: int = CELL_STEPS, meridian: int = CELL_MERIDIAN):
+    """Axial membrane force per unit circumference N (N/mm) of the ridged tube under uniform
+    axial strain, from the tensile stage's axisymmetric half-pitch cell with the wall's eq. 2
+    material (finite strain, J2): returns ``eps`` (n_steps + 1,) from 0 to ``strain`` and
+    ``N_t``, ``N_c`` (n_steps + 1,), the magnitudes in tension and in compression.
+
+    The corrugated wall stretches by unbending its ridges: it stays nearly linear to a few
+    per cent, far beyond the material's yield strain, and it is stiffer in tension (the
+    ridges straighten) than in compression (they fold)."""
+    forces = []
+    for sign in (1.0, -1.0):
+        g = replace(geometry, extension=sign * strain * geometry.gauge)
+        df = simulate_axisymmetric_tube(E, sigma_y, K, n, nu, geometry=g,
+                                        res=resolution("default", meridian=meridian,
+                                                       n_steps=n_steps))
+        forces.append(np.abs(df["force_N"].to_numpy()) / (np.pi * sum(geometry.mid_radii)))
+    eps = np.linspace(0.0, strain, n_steps + 1)
+    return eps, forces[0], forces[1]
+
+
+def uniaxial_stress(eps, E: float, sigma_y: float, K: float, n: float) -> np.ndarray:
+    """Stress (magnitude) of the eq. 2 J2 law under monotonic uniaxial strain ``eps`` (>= 0):
+    ``sigma = E eps`` up to sigma_y, then ``sigma = sigma_y + K (eps - sigma / E)^n``."""
+    eps = np.asarray(eps, dtype=float)
+    out = np.minimum(E * eps, sigma_y) if sigma_y > 0 else np.zeros_like(eps)
+    for i, e in enumerate(eps):
+        if E * e > sigma_y:
+            out[i] = brentq(lambda s: s - sigma_y - K * max(e - s / E, 0.0) ** n,
+                            sigma_y, E * e, xtol=1e-14, rtol=1e-13)
+    return out
+
+
+def fit_membrane_plasticity(eps, N, E_eq: float, t_eq: float) -> tuple[float, float, float]:
+    """(sigma_y, K, n) of the equivalent shell whose membrane force ``t_eq sigma(eps)``
+    (:func:`uniaxial_stress` at E_eq) fits ``N(eps)`` in least squares; eps > 0 points."""
+    sel = eps > 0.0
+    e, target = eps[sel], N[sel]
+    scale = float(target.max())
+
+    def residual(p):
+        return (t_eq * uniaxial_stress(e, E_eq, *p) - target) / scale
+
+    start = [0.5 * scale / t_eq, scale / t_eq, 0.5]
+    fit = least_squares(residual, start, bounds=([1e-9, 0.0, 0.02], [np.inf, np.inf, 1.0]),
+                        x_scale=[start[0], start[1], 0.5], xtol=1e-12, ftol=1e-12)
+    return float(fit.x[0]), float(fit.x[1]), float(fit.x[2])
+
+
 def ring_ovalisation(P: float, radius: float, EI: float) -> float:
     """Change of diameter along a diametral line load P (N per unit length) of a ring."""
     return RING_OVALISATION * P * radius ** 3 / EI
@@ -148,7 +160,7 @@ def ring_ovalisation(P: float, radius: float, EI: float) -> float:
 def equivalent_shell(E: float, sigma_y: float, K: float, n: float,
                      geometry: TubeGeometry = TubeGeometry(), *, nu: float = 0.42,
                      rho: float | None = None, method: str = "fe", meridian: int = 48) -> dict:
-    """Isotropic J2 shell equivalent to the ridged tube wall (module docstring).
+    """Isotropic J2 shell equivalent to the ridged tube wall (docs/theory/tube_equivalent.md).
 
     ``E, sigma_y, K, n``: material of the ridged wall (Table 2 / tensile stage).  ``nu``:
     material Poisson ratio (used for the ridged reference only).  ``rho``: material density
@@ -156,11 +168,17 @@ def equivalent_shell(E: float, sigma_y: float, K: float, n: float,
     ``"strip"`` (closed form, softer) for the axial stiffness.
 
     Returns ``E, sigma_y, K, n, t, radius`` (the equivalent smooth shell: section thickness
-    ``t``, mid radius ``radius``), ``nu`` (0.0), ``t_contact`` (geometric thickness for
+    ``t``, mid radius ``radius``; the hardening law fitted to the ridged cell's mean membrane
+    law, :func:`cell_membrane_law`), ``nu`` (0.0), ``t_contact`` (geometric thickness for
     contact), ``rho`` (if given), and diagnostics ``axial_stiffness`` (N/mm),
     ``hoop_bending_stiffness`` (N mm), ``hoop_membrane_ratio`` (ridged/equivalent),
-    ``first_yield_strain_ratio`` (overall axial strain at first yield of the ridged wall /
-    that of the equivalent), ``strip_axial_stiffness``.
+    ``membrane_fit_error`` (largest relative error of the equivalent's membrane force
+    against the cell's mean from 1 % strain), ``tension_over_compression`` (the cell's
+    N_t / N_c at CELL_STRAIN, which one isotropic law cannot follow), ``yield_strain``
+    (the equivalent's, against the material's ``material_yield_strain``),
+    ``hoop_yield_moment`` and ``hoop_yield_moment_ridged`` (N mm/mm: sigma_y t^2/6 of the
+    equivalent; first yield of the ridged wall section, sigma_y I / (A + t/2)),
+    ``strip_axial_stiffness``.
     """
     if not (E > 0 and sigma_y >= 0 and K >= 0 and n > 0):
         raise ValueError(f"invalid tube material: E={E}, sigma_y={sigma_y}, K={K}, n={n}")
@@ -175,17 +193,23 @@ def equivalent_shell(E: float, sigma_y: float, K: float, n: float,
     D_h = E * sec["I"]
     t_eq = float(np.sqrt(12.0 * D_h / k_ax))
     E_eq = float(k_ax / t_eq)
-    scale = E_eq / E
-    # ridged wall in tension (strip estimate): stress N/t + 6 N A/t^2 at the ridge reaches
-    # sigma_y at N_y; overall strain N_y / k_ax.  Equivalent: sigma_y / E.
-    t = geometry.wall
-    N_y = sigma_y / (1.0 / t + 6.0 * sec["amplitude"] / t ** 2)
+    eps, N_t, N_c = cell_membrane_law(float(E), float(sigma_y), float(K), float(n), float(nu),
+                                      geometry)
+    N_mean = 0.5 * (N_t + N_c)
+    sy_eq, K_eq, n_eq = fit_membrane_plasticity(eps, N_mean, E_eq, t_eq)
+    N_eq = t_eq * uniaxial_stress(eps, E_eq, sy_eq, K_eq, n_eq)
+    from_1 = eps >= 0.01
     out = {
-        "E": E_eq, "sigma_y": sigma_y * scale, "K": K * scale, "n": n,
+        "E": E_eq, "sigma_y": sy_eq, "K": K_eq, "n": n_eq,
         "t": t_eq, "radius": sec["radius"], "nu": 0.0, "t_contact": sec["t_contact"],
         "axial_stiffness": float(k_ax), "hoop_bending_stiffness": float(D_h),
         "hoop_membrane_ratio": float(E * sec["area"] / k_ax),
-        "first_yield_strain_ratio": float(N_y / k_ax / (sigma_y / E)) if sigma_y > 0 else float("nan"),
+        "membrane_fit_error": float(np.max(np.abs(N_eq[from_1] / N_mean[from_1] - 1.0))),
+        "tension_over_compression": float(N_t[-1] / N_c[-1]),
+        "yield_strain": sy_eq / E_eq, "material_yield_strain": sigma_y / E,
+        "hoop_yield_moment": sy_eq * t_eq ** 2 / 6.0,
+        "hoop_yield_moment_ridged": float(sigma_y * sec["I"]
+                                          / (sec["amplitude"] + 0.5 * geometry.wall)),
         "strip_axial_stiffness": float(k_strip),
     }
     if rho is not None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import base64
 import html
 import math
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import h5py
@@ -243,38 +244,52 @@ COHESIVE_MESH_NOTE = (
     "cohesive values carry an uncertainty of that order.</p>")
 
 
-def hifi_section(results: Path, cfg: dict, measured: dict) -> str:
-    """Everything of results/hifi that exists: cross-check Table 3, the calibration chain,
-    the interface beside the paper's, the virtual tests, their energies and the cost."""
-    heading = f"<h2>{html.escape(STAGES['hifi'][0])}</h2>"
-    root = Path(results) / "hifi"
-    runs = sorted(root.glob("*/*/summary.json")) + sorted(root.glob("chain/*/*/summary.json"))
-    order = {"mu_rtb": 0, "mu_rtp": 1, "cohesive": 2, "fabric": 3}   # the chain of Sec. 4.2
-    fits = sorted(root.glob("chain/*/fit.json"), key=lambda p: (order.get(p.parent.name, 9), p.parent.name))
-    if not runs and not fits and not (root / "crosscheck" / "table3.csv").exists():
-        return (heading + "<p class='note'>No hi-fi results yet: <code>snakemake --cores 2 "
-                "hifi_crosscheck_all</code> (Table 3 at the paper's values) and <code>hifi_chain_all</code> "
-                "(the Sec. 4.2 calibration chain and the virtual tests) write them under "
-                "<code>results/hifi/</code>; hours at the default profile.</p>")
-    paper = cfg.get("paper", {})
-    parts = [heading, "<p class='note'>Explicit mesoscale model of the three-point test (Sec. 4.1). "
-             "The cross-check runs use the paper's Table 2 and interface values; the calibration chain "
-             "fits the interface to the measured means (Sec. 4.2) with the tensile stage's Table 2.</p>"]
-    cost_rows, n_runs, wall_total = [], 0, 0.0
+NO_HIFI_NOTE = (
+    "<p class='note'>No hi-fi results yet: <code>snakemake --cores 2 "
+    "hifi_crosscheck_all</code> (Table 3 at the paper's values) and <code>hifi_chain_all</code> "
+    "(the Sec. 4.2 calibration chain and the virtual tests) write them under "
+    "<code>results/hifi/</code>; hours at the default profile.</p>")
+HIFI_INTRO = (
+    "<p class='note'>Explicit mesoscale model of the three-point test (Sec. 4.1). "
+    "The cross-check runs use the paper's Table 2 and interface values; the calibration chain "
+    "fits the interface to the measured means (Sec. 4.2) with the tensile stage's Table 2.</p>")
+CHAIN_ORDER = {"build": 0, "mu_rtb": 1, "mu_rtp": 2, "cohesive": 3, "fabric": 4}   # stages/chain_settings.STEPS
+RUN_GROUPS = (("virtual", "Virtual tests at the calibrated interface"),   # single runs, in section order
+              ("crosscheck", "Cross-check runs at the paper's parameters"),
+              ("chain", "Calibration runs at the best points"))
 
-    # cross-check of Table 3
+
+@dataclass
+class _HifiCost:
+    """The hi-fi runs behind the section, in section order, for its cost table."""
+    rows: list = field(default_factory=list)
+    n_runs: int = 0
+    wall: float = 0.0
+
+    def add(self, label: str, n: int, wall_s: float, per_run: float) -> None:
+        self.n_runs += n
+        self.wall += wall_s
+        self.rows.append([label, n, per_run, wall_s / 60.0])
+
+
+def _crosscheck_table(root: Path, paper: dict) -> str:
+    """Table 3 by eq. 13 + simplex on the cross-check curves beside the paper's."""
     t3 = root / "crosscheck" / "table3.csv"
-    if t3.exists():
-        frame = pd.read_csv(t3)
-        rows = []
-        for r in frame.itertuples():
-            ref = paper.get("table3", {}).get(r.case, {})
-            for k in ("E", "sigma_y", "K", "n"):
-                rows.append([r.case, k, getattr(r, k), ref.get(k, ""), _rel(getattr(r, k), ref.get(k))])
-        parts.append("<h3>Table 3 from hi-fi curves at the paper's parameters</h3>"
-                     "<p>eq. 13 + simplex (the ROM stage's fit) on each hi-fi curve "
-                     "(<code>results/hifi/crosscheck/table3.csv</code>).</p>"
-                     + _table(["case", "parameter", "hi-fi + ROM fit", "paper (Table 3)", "difference"], rows))
+    if not t3.exists():
+        return ""
+    rows = []
+    for r in pd.read_csv(t3).itertuples():
+        ref = paper.get("table3", {}).get(r.case, {})
+        for k in ("E", "sigma_y", "K", "n"):
+            rows.append([r.case, k, getattr(r, k), ref.get(k, ""), _rel(getattr(r, k), ref.get(k))])
+    return ("<h3>Table 3 from hi-fi curves at the paper's parameters</h3>"
+            "<p>eq. 13 + simplex (the ROM stage's fit) on each hi-fi curve "
+            "(<code>results/hifi/crosscheck/table3.csv</code>).</p>"
+            + _table(["case", "parameter", "hi-fi + ROM fit", "paper (Table 3)", "difference"], rows))
+
+
+def _crosscheck_rom_figures(root: Path) -> str:
+    """The ROM fitted to each cross-check curve, over that curve."""
     figs = []
     for fit_path in sorted(root.glob("crosscheck/*/rom/fit.json")):
         fit = read_fit(fit_path)
@@ -283,10 +298,12 @@ def hifi_section(results: Path, cfg: dict, measured: dict) -> str:
             figs.append(_img(plots.hifi_rom_figure(pd.read_csv(hifi_curve), pd.read_csv(fit_path.parent / "curve.csv"),
                                                    title=f"{fit['item']}: ROM on the hi-fi curve"),
                              f"rom crosscheck {fit['item']}"))
-    if figs:
-        parts.append('<div class="fit">' + "".join(figs) + "</div>")
+    return '<div class="fit">' + "".join(figs) + "</div>" if figs else ""
 
-    # interface beside the paper's
+
+def _interface_table(root: Path, fits: list[Path], cfg: dict) -> str:
+    """The calibrated interface (interface.csv, else the chain's fits so far) beside the
+    initial guess and the paper's."""
     iface = root / "interface.csv"
     fitted = {}
     if iface.exists():
@@ -294,91 +311,136 @@ def hifi_section(results: Path, cfg: dict, measured: dict) -> str:
     else:
         for p in fits:
             fitted.update(read_fit(p)["parameters"])
-    if fitted:
-        pi, guess = paper.get("interface", {}), cfg.get("hifi", {}).get("parameters", {})
-        rows = [[k, fitted.get(k, ""), guess.get(k, ""), pi.get(k, ""), _rel(fitted.get(k), pi.get(k))]
-                for k in HIFI_INTERFACE]
-        src = "results/hifi/interface.csv" if iface.exists() else "chain fits so far (interface.csv not written yet)"
-        parts.append(f"<h3>Calibrated interface (Sec. 4.2)</h3><p>From <code>{html.escape(src)}</code>.</p>"
-                     + _table(["parameter", "calibrated", "initial guess", "paper (Sec. 4.2)", "difference"], rows))
+    if not fitted:
+        return ""
+    pi = cfg.get("paper", {}).get("interface", {})
+    guess = {**cfg.get("hifi", {}).get("parameters", {}), **cfg.get("hifi", {}).get("build", {})}
+    names = list(HIFI_INTERFACE) + [k for k in fitted if k not in HIFI_INTERFACE]   # build state
+    rows = [[k, fitted.get(k, ""), guess.get(k, ""), pi.get(k, ""), _rel(fitted.get(k), pi.get(k))]
+            for k in names]
+    src = "results/hifi/interface.csv" if iface.exists() else "chain fits so far (interface.csv not written yet)"
+    return (f"<h3>Calibrated interface (Sec. 4.2) and build state</h3><p>From <code>{html.escape(src)}</code>; "
+            "the build state (end_tape_layers: wraps of the end bands) is not in the paper.</p>"
+            + _table(["parameter", "calibrated", "initial guess", "paper (Sec. 4.2)", "difference"], rows))
 
-    # calibration steps
-    for p in fits:
-        fit = read_fit(p)
-        status = "" if fit.get("converged") else ' <span class="bad">(search did not converge)</span>'
-        if "not identifiable" in fit.get("message", ""):
-            status = f' <span class="bad">{html.escape(fit["message"])}.</span>'
-        text = (f"<h3>Calibration step {html.escape(fit['item'])}</h3><p>{html.escape(fit.get('method', ''))} "
-                f"on {html.escape(', '.join(fit.get('cases', [])))}, deflection window "
-                f"{fit.get('window')} mm: ||e||<sub>l2</sub> = {fit['error_l2']:.4g} N (relative "
-                f"{100 * fit['error_rel']:.2f} %), {fit['nfev']} evaluations, {fit.get('rejected', 0)} rejected, "
-                f"{fit.get('hifi_wall_s', 0.0) / 60:.1f} min of hi-fi runs.{status}</p>"
-                + _table(["", *fit["parameters"]], [["fitted", *fit["parameters"].values()],
-                                                     ["paper", *[paper.get("interface", {}).get(k, "")
-                                                                 for k in fit["parameters"]]]]))
-        if fit["item"] == "cohesive":
-            text += COHESIVE_MESH_NOTE
-        figs = []
-        curve = pd.read_csv(p.parent / "curve.csv")
-        preps = {c: measured[c] for c in fit.get("cases", []) if c in measured}
-        if preps:
-            figs.append(_img(plots.hifi_cases_figure(preps, {c: g for c, g in curve.groupby("case")},
-                                                     title=f"step {fit['item']}", window=fit.get("window")),
-                             f"chain {fit['item']}"))
-        trace = _load_trace(p.parent / "trace.h5")
-        if trace is not None and len(trace):
-            figs.append(_img(plots.trace_figure(trace, title=f"{fit['item']}: optimiser trace"),
-                             f"trace {fit['item']}"))
-        rejected = []
-        if (p.parent / "rejected.jsonl").exists():
-            for line in (p.parent / "rejected.jsonl").read_text().splitlines()[:10]:
-                r = _read_json_line(line)
-                if r:
-                    rejected.append([r.get("case") or "", ", ".join(f"{k}={v:.4g}" for k, v in r["parameters"].items()
-                                                                    if k in fit["parameters"]), r.get("reason", "")])
-        rej = _table(["case", "parameters", "reason"], rejected) if rejected else ""
-        parts.append(f'<div>{text}{rej}<div class="fit">{"".join(figs)}</div></div>')
-        n = int(fit.get("hifi_runs", fit["nfev"]))
-        n_runs += n
-        wall_total += float(fit.get("hifi_wall_s", 0.0))
-        cost_rows.append([f"fit {fit['item']}", n, float(fit.get("hifi_wall_s", 0.0)) / max(n, 1),
-                          float(fit.get("hifi_wall_s", 0.0)) / 60.0])
 
-    # single runs: cross-check, virtual tests, best points of the fits
-    blocks = {"crosscheck": [], "virtual": [], "chain": []}
+def _step_text(fit: dict, paper: dict) -> str:
+    """Heading, method, window, error, cost and fitted values of one calibration step."""
+    status = "" if fit.get("converged") else ' <span class="bad">(search did not converge)</span>'
+    if "not identifiable" in fit.get("message", ""):
+        status = f' <span class="bad">{html.escape(fit["message"])}.</span>'
+    text = (f"<h3>Calibration step {html.escape(fit['item'])}</h3><p>{html.escape(fit.get('method', ''))} "
+            f"on {html.escape(', '.join(fit.get('cases', [])))}, deflection window "
+            f"{fit.get('window')} mm: ||e||<sub>l2</sub> = {fit['error_l2']:.4g} N (relative "
+            f"{100 * fit['error_rel']:.2f} %), {fit['nfev']} evaluations, {fit.get('rejected', 0)} rejected, "
+            f"{fit.get('hifi_wall_s', 0.0) / 60:.1f} min of hi-fi runs.{status}</p>"
+            + _table(["", *fit["parameters"]], [["fitted", *fit["parameters"].values()],
+                                                 ["paper", *[paper.get("interface", {}).get(k, "")
+                                                             for k in fit["parameters"]]]]))
+    if fit["item"] == "cohesive":
+        text += COHESIVE_MESH_NOTE
+    return text
+
+
+def _step_figures(folder: Path, fit: dict, measured: dict) -> list[str]:
+    """The step's curves against the measured cases and its optimiser trace."""
+    figs = []
+    curve = pd.read_csv(folder / "curve.csv")
+    preps = {c: measured[c] for c in fit.get("cases", []) if c in measured}
+    if preps:
+        figs.append(_img(plots.hifi_cases_figure(preps, {c: g for c, g in curve.groupby("case")},
+                                                 title=f"step {fit['item']}", window=fit.get("window")),
+                         f"chain {fit['item']}"))
+    trace = _load_trace(folder / "trace.h5")
+    if trace is not None and len(trace):
+        figs.append(_img(plots.trace_figure(trace, title=f"{fit['item']}: optimiser trace"),
+                         f"trace {fit['item']}"))
+    return figs
+
+
+def _step_rejections(folder: Path, fit: dict) -> str:
+    """The first ten rejected evaluations of a step (rejected.jsonl) as a table."""
+    rejected = []
+    if (folder / "rejected.jsonl").exists():
+        for line in (folder / "rejected.jsonl").read_text().splitlines()[:10]:
+            r = _read_json_line(line)
+            if r:
+                rejected.append([r.get("case") or "", ", ".join(f"{k}={v:.4g}" for k, v in r["parameters"].items()
+                                                                if k in fit["parameters"]), r.get("reason", "")])
+    return _table(["case", "parameters", "reason"], rejected) if rejected else ""
+
+
+def _calibration_step(path: Path, paper: dict, measured: dict, cost: _HifiCost) -> str:
+    """One step of the chain (its fit.json at ``path``); its runs go to ``cost``."""
+    fit = read_fit(path)
+    text = _step_text(fit, paper)
+    figs = _step_figures(path.parent, fit, measured)
+    rej = _step_rejections(path.parent, fit)
+    n = int(fit.get("hifi_runs", fit["nfev"]))
+    wall = float(fit.get("hifi_wall_s", 0.0))
+    cost.add(f"fit {fit['item']}", n, wall, wall / max(n, 1))
+    return f'<div>{text}{rej}<div class="fit">{"".join(figs)}</div></div>'
+
+
+def _single_run(path: Path, root: Path, measured: dict, cost: _HifiCost) -> tuple[str, str]:
+    """(group, block) of one single run (its summary.json at ``path``; block "" if it has
+    no curve); cross-check and virtual runs go to ``cost`` (a reused run at no cost)."""
+    folder = path.parent
+    group = folder.parent.name if folder.parent.parent == root else "chain"
+    case = folder.name
+    title = {"crosscheck": f"cross-check {case} (paper's values)", "virtual": f"virtual test {case}",
+             "chain": f"fit {folder.parent.name}: {case} at the best point"}[group]
+    block, summary = _hifi_run_block(title, folder, measured.get(case))
+    if not block:
+        return group, ""
+    if summary.get("role"):
+        block = block.replace("</h4>", f" <span class='note'>({html.escape(summary['role'])})</span></h4>", 1)
+    if group != "chain" and summary.get("reused_from"):      # the fit's run, counted there
+        cost.rows.append([f"{title} (the fit's best-point run)", 0, 0.0, 0.0])
+    elif group != "chain":
+        wall = float(summary.get("wall_s", 0.0))
+        cost.add(title, 1, wall, wall)
+    return group, block
+
+
+def _single_runs(root: Path, runs: list[Path], measured: dict, cost: _HifiCost) -> str:
+    """The single runs by group: virtual tests, cross-check runs, best points of the fits."""
+    blocks = {group: [] for group, _ in RUN_GROUPS}
     for path in runs:
-        folder = path.parent
-        group = folder.parent.name if folder.parent.parent == root else "chain"
-        case = folder.name
-        title = {"crosscheck": f"cross-check {case} (paper's values)", "virtual": f"virtual test {case}",
-                 "chain": f"fit {folder.parent.name}: {case} at the best point"}[group]
-        block, summary = _hifi_run_block(title, folder, measured.get(case))
-        if not block:
-            continue
-        if summary.get("role"):
-            block = block.replace("</h4>", f" <span class='note'>({html.escape(summary['role'])})</span></h4>", 1)
-        blocks[group].append(block)
-        if group != "chain" and summary.get("reused_from"):      # the fit's run, counted there
-            cost_rows.append([f"{title} (the fit's best-point run)", 0, 0.0, 0.0])
-        elif group != "chain":
-            n_runs += 1
-            wall_total += float(summary.get("wall_s", 0.0))
-            cost_rows.append([title, 1, float(summary.get("wall_s", 0.0)), float(summary.get("wall_s", 0.0)) / 60.0])
-    for group, head in (("virtual", "Virtual tests at the calibrated interface"),
-                        ("crosscheck", "Cross-check runs at the paper's parameters"),
-                        ("chain", "Calibration runs at the best points")):
-        if blocks[group]:
-            parts.append(f"<h3>{head}</h3>" + "".join(blocks[group]))
+        group, block = _single_run(path, root, measured, cost)
+        if block:
+            blocks[group].append(block)
+    return "".join(f"<h3>{head}</h3>" + "".join(blocks[group]) for group, head in RUN_GROUPS if blocks[group])
 
-    # cost
-    cost = paper.get("cost", {})
-    if cost_rows:
-        cost_rows.append(["total", n_runs, wall_total / max(n_runs, 1), wall_total / 60.0])
-        paper_line = (f"Paper (Sec. 4.3): one hi-fi run {cost.get('hifi_wall_min', '?')} min on "
-                      f"{cost.get('hifi_cores', '?')} cores (= {float(cost.get('hifi_wall_min', 0)) * float(cost.get('hifi_cores', 0)) / 60:.0f} "
-                      f"core-hours); here each run uses one core.") if cost else ""
-        parts.append("<h3>Cost</h3><p>" + html.escape(paper_line) + "</p>"
-                     + _table(["item", "hi-fi runs", "wall per run [s]", "wall total [min]"], cost_rows))
+
+def _cost_table(cost: _HifiCost, paper_cost: dict) -> str:
+    """Runs and wall time of every item and in total, beside the paper's cost."""
+    if not cost.rows:
+        return ""
+    rows = cost.rows + [["total", cost.n_runs, cost.wall / max(cost.n_runs, 1), cost.wall / 60.0]]
+    paper_line = (f"Paper (Sec. 4.3): one hi-fi run {paper_cost.get('hifi_wall_min', '?')} min on "
+                  f"{paper_cost.get('hifi_cores', '?')} cores (= {float(paper_cost.get('hifi_wall_min', 0)) * float(paper_cost.get('hifi_cores', 0)) / 60:.0f} "
+                  f"core-hours); here each run uses one core.") if paper_cost else ""
+    return ("<h3>Cost</h3><p>" + html.escape(paper_line) + "</p>"
+            + _table(["item", "hi-fi runs", "wall per run [s]", "wall total [min]"], rows))
+
+
+def hifi_section(results: Path, cfg: dict, measured: dict) -> str:
+    """Everything of results/hifi that exists: cross-check Table 3, the calibration chain,
+    the interface beside the paper's, the virtual tests, their energies and the cost."""
+    heading = f"<h2>{html.escape(STAGES['hifi'][0])}</h2>"
+    root = Path(results) / "hifi"
+    runs = sorted(root.glob("*/*/summary.json")) + sorted(root.glob("chain/*/*/summary.json"))
+    fits = sorted(root.glob("chain/*/fit.json"),
+                  key=lambda p: (CHAIN_ORDER.get(p.parent.name, 9), p.parent.name))
+    if not runs and not fits and not (root / "crosscheck" / "table3.csv").exists():
+        return heading + NO_HIFI_NOTE
+    paper = cfg.get("paper", {})
+    cost = _HifiCost()
+    parts = [heading, HIFI_INTRO, _crosscheck_table(root, paper), _crosscheck_rom_figures(root),
+             _interface_table(root, fits, cfg)]
+    parts += [_calibration_step(p, paper, measured, cost) for p in fits]
+    parts += [_single_runs(root, runs, measured, cost), _cost_table(cost, paper.get("cost", {}))]
     return "".join(parts)
 
 

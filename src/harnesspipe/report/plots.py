@@ -10,6 +10,17 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
+def _finish(fig, ax, xlabel: str, ylabel: str, title: str, legend_size: int, legend_at="best"):
+    """Labels, title, grid and legend of a one-axes figure, laid out; returns the figure."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=legend_size, loc=legend_at)
+    fig.tight_layout()
+    return fig
+
+
 def fit_figure(prepared, curve=None, title="", xlabel="displacement [mm]", label="simulated", reference=None):
     """Band (min/max of the replicates), their mean and a simulated curve; ``reference``
     (displacement_mm, force_N): the hi-fi curve a ROM was fitted to, when not the mean;
@@ -26,13 +37,7 @@ def fit_figure(prepared, curve=None, title="", xlabel="displacement [mm]", label
                 label="hi-fi virtual test (reference)")
     if curve is not None:
         ax.plot(curve["displacement_mm"], curve["force_N"], color="tab:red", lw=1.6, ls="--", label=label)
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("force [N]")
-    ax.set_title(title, fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
-    fig.tight_layout()
-    return fig
+    return _finish(fig, ax, xlabel, "force [N]", title, legend_size=8)
 
 
 def trace_figure(trace, title=""):
@@ -80,13 +85,7 @@ def shape_figure(prepared, shapes, title=""):
             ax.plot(m[:, 3], m[:, 4], "o", ms=3.5, mfc="none", color=c)
     ax.plot([], [], "o", mfc="none", color="0.3", label="markers (3 samples)")
     ax.set_aspect("equal")
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
-    ax.set_title(title, fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower right")
-    fig.tight_layout()
-    return fig
+    return _finish(fig, ax, "x [mm]", "y [mm]", title, legend_size=7, legend_at="lower right")
 
 
 # --------------------------------------------------------------------------- hi-fi section
@@ -108,13 +107,7 @@ def hifi_curve_figure(curves: dict, prepared=None, title="", window=None, xlabel
         ax.plot(x, c["force_N"], lw=1.6, ls=styles[k % len(styles)], label=label)
     if window is not None:
         ax.axvspan(window[0], window[1], color="tab:orange", alpha=0.08, label="fitted window")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("force [N]")
-    ax.set_title(title, fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
-    fig.tight_layout()
-    return fig
+    return _finish(fig, ax, xlabel, "force [N]", title, legend_size=7)
 
 
 def hifi_cases_figure(prepared: dict, curves: dict, title="", window=None):
@@ -166,11 +159,6 @@ def energies_figure(history, title=""):
         if col in history and (col in ("KE", "internal", "W_ext") or np.any(np.abs(history[col]) > 0)):
             ax.plot(x, history[col], lw=1.8 if col == "W_ext" else 1.2,
                     ls="--" if col == "W_ext" else "-", label=label)
-    ax.set_xlabel({"deflection_mm": "deflection [mm]", "displacement_mm": "crosshead displacement [mm]",
-                   "time_s": "time [s]"}[xcol])
-    ax.set_ylabel("energy [N mm]")
-    ax.set_title(title, fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left")
-    fig.tight_layout()
-    return fig
+    xlabel = {"deflection_mm": "deflection [mm]", "displacement_mm": "crosshead displacement [mm]",
+              "time_s": "time [s]"}[xcol]
+    return _finish(fig, ax, xlabel, "energy [N mm]", title, legend_size=7, legend_at="upper left")

@@ -31,7 +31,7 @@ def settings_from_config(cfg: dict, load_case: str | None = None, t_total: float
 
 
 def inputs(settings: dict, table2: Path | None):
-    """The :class:`harnesspipe.models.hifi.HifiInputs` of the run (case: S1's, the 38-wire
+    """The :class:`harnesspipe.models.hifi_bundle.HifiInputs` of the run (case: S1's, the 38-wire
     CWB; every segment's own case is read from ``model.cases``)."""
     from harnesspipe.stages.hifi import inputs as hifi_inputs
     from harnesspipe.stages.hifi_chain import model_config

@@ -1,6 +1,9 @@
 """The hi-fi calibration chain of Sec. 4.2 and the settings its rules pass to the stages.
 
-The chain in order: each step fixes what the earlier steps fitted (``prior``).  ``cores``:
+The chain in order: each step fixes what the earlier steps fitted (``prior``).  It starts
+with the specimen's build state that the sensitivity screen shows the curves depend on (the
+end bands' wraps, ``build``; bench/RESULTS.md "Hi-fi sensitivity screen"), then the paper's
+steps.  ``cores``:
 the step's Snakemake threads.  Nothing else of the chain can run beside the friction and
 cohesive fits (every virtual test needs their interface), so they take both cores (one process
 per case, or one process with two Numba threads); the fabric fit takes one, and the virtual
@@ -15,21 +18,26 @@ from __future__ import annotations
 import json
 
 STEPS = {
+    "build": {"names": ["end_tape_layers"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
+              "window": "build_window", "method": "bounded", "bounds": "layers_bounds",
+              "prior": [], "cores": 2},
     "mu_rtb": {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": "friction_window",
-               "method": "bounded", "bounds": "mu_bounds", "prior": [], "cores": 2},
+               "method": "bounded", "bounds": "mu_bounds", "prior": ["build"], "cores": 2},
     "mu_rtp": {"names": ["mu_rtp"], "cases": ["cwb19_t2_open_halflap"],
                "window": "friction_window", "method": "bounded", "bounds": "mu_bounds",
-               "prior": ["mu_rtb"], "cores": 2},
+               "prior": ["build", "mu_rtb"], "cores": 2},
     "cohesive": {"names": ["delta0", "delta_f", "alpha_d"],
                  "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"], "window": "cohesive_window",
-                 "method": "simplex", "prior": ["mu_rtb", "mu_rtp"], "cores": 2},
+                 "method": "simplex", "prior": ["build", "mu_rtb", "mu_rtp"], "cores": 2},
     "fabric": {"names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": "fabric_window",
-               "method": "bounded", "bounds": "E2_bounds", "prior": ["mu_rtb", "mu_rtp", "cohesive"],
-               "cores": 1},
+               "method": "bounded", "bounds": "E2_bounds",
+               "prior": ["build", "mu_rtb", "mu_rtp", "cohesive"], "cores": 1},
 }
 VALIDATION = ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric")   # Sec. 4.2: predicted, no refit
 CALIBRATED = sorted({c for s in STEPS.values() for c in s["cases"]})
-WINDOWS = ("friction_window", "cohesive_window", "fabric_window", "mu_bounds", "E2_bounds")
+BUILD = ("end_tape_layers",)      # build-state inputs the chain fits (config hifi.build)
+WINDOWS = ("build_window", "friction_window", "cohesive_window", "fabric_window",
+           "layers_bounds", "mu_bounds", "E2_bounds")
 
 
 def check_windows(config: dict) -> None:
@@ -47,6 +55,24 @@ def cases(config: dict) -> dict:
 
 def is_fabric(config: dict, case: str) -> bool:
     return cases(config)[case]["covering"] == "fabric_tube"
+
+
+def role(case: str) -> str:
+    """A case's role in the chain: calibration (fitted on), validation (predicted, Sec. 4.2)
+    or prediction."""
+    if case in VALIDATION:
+        return "validation"
+    return "calibration" if case in CALIBRATED else "prediction"
+
+
+def virtual_priority(config: dict, case: str, reused: bool) -> float:
+    """Scheduling priority of a virtual test: longest first (so the last one to finish is a
+    short one), 1 plus the run's cost in wire-steps (wires x t_total_scale) / 1000, below
+    the chain's 10; a reused run is 1."""
+    if reused:
+        return 1.0
+    c = cases(config)[case]
+    return 1.0 + sum(c["wires"].values()) * c.get("t_total_scale", 1.0) / 1000.0
 
 
 def budget(config: dict) -> dict:
@@ -70,7 +96,8 @@ def model(config: dict, case: str, resolution: dict, paper_coverings: bool = Fal
         "profile": config["profile"],
         "profiles": {config["profile"]: {"hifi": resolution["hifi"]}},
         "cases": {case: c},
-        "hifi": {"coverings": "paper", "explicit": config["hifi"]["explicit"], "extra_cases": {}},
+        "hifi": {"coverings": "paper", "explicit": config["hifi"]["explicit"],
+                 "build": config["hifi"]["build"], "extra_cases": {}},
         "interfaces": config["interfaces"],
         "explicit": config["explicit"],
         "materials": mats,
@@ -113,6 +140,7 @@ def fit_settings(config: dict, step: str, resolution: dict) -> str:
     bounded = s["method"] == "bounded"
     fabric = any(is_fabric(config, c) for c in s["cases"])
     start = {k: v for k, v in config["hifi"]["parameters"].items() if k != "E2_over_E1" or fabric}
+    start.update({k: config["hifi"]["build"][k] for k in BUILD if k in s["names"]})
     window = pipe[s["window"]]
     return json.dumps({
         "names": s["names"], "cases": s["cases"], "window": window, "method": s["method"],

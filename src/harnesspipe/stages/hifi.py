@@ -3,7 +3,7 @@
 Artefacts (``outdir``): ``energies.csv`` (time, KE, every absorbed-energy family, W_ext,
 balance), ``slip_out.csv`` (axial slip of every wire end relative to the covering end),
 ``shapes/`` (VTU per instant + PVD) and ``shapes.png``; ``out_csv``
-(``deflection_mm,force_N`` at the feeder) and ``summary_json`` (DESIGN / issue 5
+(``deflection_mm,force_N`` at the feeder) and ``summary_json`` (the DESIGN summary
 fields plus the parameters used).  Everything is written only after the run
 succeeded, each file atomically.
 """
@@ -20,6 +20,7 @@ INTERFACE_KEYS = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E
                   "mu_k", "d_c", "K_nn", "K_ss", "K_tt")
 EXPLICIT_KEYS = ("t_total", "f_m", "safety", "mass_damping", "penalty", "penalty_layers",
                  "search_margin", "tie_damping", "stop_deflection")
+BUILD_KEYS = ("wire_fill", "end_tape_layers")    # the specimen's build state (config hifi.build)
 COVERINGS = ("closed_tube", "open_tube", "fabric_tube")
 
 
@@ -46,6 +47,17 @@ def covering_properties(cfg: dict, table2: Path | None) -> dict:
             for row in frame.itertuples()}
 
 
+def _build_value(key: str, value: float):
+    """A build-state value of ``--set``, checked as the config schema checks it."""
+    if key == "end_tape_layers":
+        if not 1.0 <= value <= 10.0:
+            raise ConfigError(f"--set end_tape_layers={value:g}: expected a number of wraps, 1..10")
+        return value
+    if not 0.0 <= value <= 1.0:
+        raise ConfigError(f"--set {key}={value:g}: expected a fraction in [0, 1]")
+    return value
+
+
 def parameters(cfg: dict, overrides: dict, table2: Path | None = None) -> dict:
     """Everything a run needs, as plain values: interface, explicit, resolution, coverings."""
     from harnesspipe.config import resolution
@@ -54,6 +66,7 @@ def parameters(cfg: dict, overrides: dict, table2: Path | None = None) -> dict:
         "explicit": {**cfg["hifi"]["explicit"], "f_m": cfg["explicit"]["f_m"]},
         "resolution": dict(resolution(cfg)["hifi"]),
         "coverings": covering_properties(cfg, table2),
+        "build": dict(cfg["hifi"]["build"]),
     }
     for key, text in overrides.items():
         try:
@@ -67,23 +80,27 @@ def parameters(cfg: dict, overrides: dict, table2: Path | None = None) -> dict:
             p["interface"][key] = value
         elif key in EXPLICIT_KEYS:
             p["explicit"][key] = value
+        elif key in BUILD_KEYS:
+            p["build"][key] = _build_value(key, value)
         elif key in p["resolution"]:
             p["resolution"][key] = int(value) if float(value).is_integer() else value
         else:
-            allowed = (list(INTERFACE_KEYS) + list(EXPLICIT_KEYS) + sorted(p["resolution"])
+            allowed = (list(INTERFACE_KEYS) + list(EXPLICIT_KEYS) + list(BUILD_KEYS)
+                       + sorted(p["resolution"])
                        + [f"{c}.E|sigma_y|K|n" for c in COVERINGS])
             raise ConfigError(f"--set {key}: unknown parameter (one of {', '.join(allowed)})")
     return p
 
 
 def inputs(cfg: dict, case: str, overrides: dict, table2: Path | None = None):
-    """The :class:`harnesspipe.models.hifi.HifiInputs` of one run from the config."""
-    from harnesspipe.models.hifi import HifiInputs
+    """The :class:`harnesspipe.models.hifi_bundle.HifiInputs` of one run from the config."""
+    from harnesspipe.models.hifi_bundle import HifiInputs
     p = parameters(cfg, overrides, table2)
     res = p["resolution"]
     definition = case_definition(cfg, case)
     t_total = p["explicit"].get("t_total", res["t_total"] * definition.get("t_total_scale", 1.0))
     explicit = {**p["explicit"], "t_total": float(t_total)}
+    cfg = {**cfg, "hifi": {**cfg["hifi"], "build": p["build"]}}      # --set build keys
     return HifiInputs(definition, cfg, p["interface"], explicit,
                       {k: v for k, v in res.items() if k != "t_total"}, p["coverings"])
 

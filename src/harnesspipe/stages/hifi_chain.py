@@ -46,6 +46,7 @@ from harnesspipe.config import ConfigError
 from harnesspipe.stages.common import read_fit, write_csv, write_fit, write_json
 
 INTERFACE = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1")
+BUILD = ("end_tape_layers",)   # build-state inputs a chain step may fit (config hifi.build)
 #: interface values a run needs but a case does not use: E2/E1 acts on fabric coverings only
 NEUTRAL = {"E2_over_E1": 1.0}
 N_GRID = 101   # points of the deflection grid a hi-fi curve is resampled to for eq. 13 (as prepare_test)
@@ -77,8 +78,11 @@ def run_key(model: dict, interface: dict, overrides: dict, table2: Path | None) 
 
 
 def _run(settings, case, interface, table2, runner):
-    cfg = model_config(settings, interface)
-    return (runner or default_runner)(cfg, case, dict(settings.get("set", {})), table2)
+    """One virtual test at ``interface``; its build-state values (``BUILD``) go to the run as
+    ``--set`` keys, the rest as the interface."""
+    build = {k: v for k, v in interface.items() if k in BUILD}
+    cfg = model_config(settings, {k: v for k, v in interface.items() if k not in BUILD})
+    return (runner or default_runner)(cfg, case, {**settings.get("set", {}), **build}, table2)
 
 
 def write_run(run, outdir: Path, summary: dict) -> None:
@@ -332,8 +336,9 @@ def _mean_uncertainty(refs: dict, window) -> float:
 
 def _search(step, settings, objective, names, fixed, live, key, floor):
     """The bounded search (one parameter) or Nelder-Mead (several) of a fit step, with the
-    identifiability screen :func:`hcal.flat_screen` at ``floor`` x ``flat_factor``; a search
-    the screen ends keeps the start values (``fixed``), whatever its first points gave."""
+    identifiability screen :func:`hcal.flat_screen` at ``floor`` x ``flat_factor`` over the
+    start and the first points; a search the screen ends keeps the start values (``fixed``),
+    whatever its first points gave."""
     log = live / "evaluations.h5"
     floor = floor * float(settings.get("flat_factor", 0.0))
     if settings["method"] == "bounded":
@@ -341,7 +346,7 @@ def _search(step, settings, objective, names, fixed, live, key, floor):
             raise ConfigError(f"hifi fit {step}: a bounded search fits one parameter, not {names}")
         return hcal.bounded_fit(objective, names[0], settings["bounds"], xatol=settings["xatol"],
                                 log_path=log, key=key, maxfev=settings["maxfev"],
-                                stop=hcal.flat_screen(2, floor, objective.penalty),
+                                stop=hcal.flat_screen(3, floor, objective.penalty),
                                 keep=float(fixed[names[0]]))
     if settings["method"] == "simplex":
         return hcal.simplex_fit(objective, {k: fixed[k] for k in names}, xatol=settings["xatol"],
@@ -384,14 +389,16 @@ def _pkey(params: dict) -> tuple:
 
 def interface_table(fit_paths: list[Path], out_csv: Path) -> pd.DataFrame:
     """results/hifi/interface.csv: ``parameter,value`` for the six interface parameters
-    (DESIGN sec. 5), each from the fit that calibrated it."""
+    (DESIGN sec. 5), each from the fit that calibrated it, then the build-state inputs the
+    chain fitted."""
     values = {}
     for p in fit_paths:
         values.update(read_fit(p)["parameters"])
     missing = [k for k in INTERFACE if k not in values]
     if missing:
         raise ConfigError(f"interface table: no fit gives {missing}")
-    frame = pd.DataFrame({"parameter": list(INTERFACE), "value": [float(values[k]) for k in INTERFACE]})
+    names = list(INTERFACE) + [k for k in BUILD if k in values]
+    frame = pd.DataFrame({"parameter": names, "value": [float(values[k]) for k in names]})
     write_csv(out_csv, frame)
     return frame
 

@@ -14,8 +14,8 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe.calibrate import tensile as tcal
-from harnesspipe.calibrate.uncertainty import error_dof, fit_standard_errors
 from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
+from harnesspipe.calibrate.uncertainty import error_dof, fit_standard_errors
 from harnesspipe.models import tensile as tmodel
 from harnesspipe.report import plots
 from harnesspipe.stages.common import read_fit, write_csv, write_fit

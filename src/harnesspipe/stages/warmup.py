@@ -8,7 +8,7 @@ def warm_up_hifi() -> dict[str, float]:
     """Build the quick hi-fi model of an open, coarse-taped CWB (every contact, tie and
     element kind but fabric) and of a fabric CWB, and integrate their first 2 ms."""
     from harnesspipe.config import load
-    from harnesspipe.fe.dynamics import integrate
+    from harnesspipe.fe.solvers.central_difference import integrate
     from harnesspipe.models import hifi, hifi_mesh
     from harnesspipe.stages.hifi import inputs
     cfg = load()

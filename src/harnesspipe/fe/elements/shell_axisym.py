@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.plane_stress import EPS33, STATE_SIZE, j2_plane_stress
+from harnesspipe.fe.materials.plane_stress import EPS33, STATE_SIZE, j2_plane_stress
 
 N_THICKNESS = 5
 ZETA, ZETA_W = np.polynomial.legendre.leggauss(N_THICKNESS)
@@ -173,7 +173,7 @@ def new_state(n_elements: int) -> np.ndarray:
 
 class AxisymShell:
     """Mesh, configuration and history of an axisymmetric shell, as a
-    :class:`harnesspipe.fe.shell_static.System` (DOFs u_r, u_z, theta per node)."""
+    :class:`harnesspipe.fe.solvers.static_dense.System` (DOFs u_r, u_z, theta per node)."""
 
     def __init__(self, X, Phi, conn, h0, E, nu, sigma_y, K, n):
         self.X = np.ascontiguousarray(X, dtype=float)

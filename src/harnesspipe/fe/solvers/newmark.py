@@ -1,7 +1,7 @@
 """Implicit Newmark time stepping with a lumped mass and banded tangents (branch ROM, Sec. 5).
 
 The integrator drives a *problem* that owns the state and the physics, like the
-static solver of :mod:`harnesspipe.fe.static`:
+static solver of :mod:`harnesspipe.fe.solvers.static`:
 
 ``ndof``, ``bandwidth``, ``mass``  number of dofs, half bandwidth, lumped mass diagonal
 ``fixed``                          constrained dofs (sorted); their motion is the problem's
@@ -32,8 +32,11 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg import solve_banded
 
-from harnesspipe.fe.newmark import DynamicConvergenceError
-from harnesspipe.fe.static import constrain_band
+from harnesspipe.fe.solvers.static import constrain_band
+
+
+class DynamicConvergenceError(RuntimeError):
+    """Newton iterations of a time step did not converge."""
 
 
 @dataclass(frozen=True)
@@ -92,7 +95,7 @@ def integrate(problem, times, settings: NewmarkSettings = NewmarkSettings(), on_
     """Step the problem from rest through ``times``; ``on_step(t)`` after each committed step.
 
     Returns the total number of Newton iterations.  Raises
-    :class:`~harnesspipe.fe.newmark.DynamicConvergenceError` with the residual history.
+    :class:`DynamicConvergenceError` with the residual history.
     """
     n, bw, M = problem.ndof, problem.bandwidth, problem.mass
     free = np.setdiff1d(np.arange(n), problem.fixed)

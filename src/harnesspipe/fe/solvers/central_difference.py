@@ -1,7 +1,8 @@
 """Explicit central difference for assembled multi-body systems, with energy accounting
 per force family (Sec. 4.1, eq. 11).
 
-The scheme is the velocity-Verlet form of :mod:`harnesspipe.fe.explicit`::
+The scheme is central differences in velocity-Verlet form (Belytschko, Liu & Moran
+2014, sec. 6.2)::
 
     v_{n+1/2} = v_n + dt/2 a_n,    x_{n+1} = x_n + dt v_{n+1/2}  (rotations: exp map)
     a_{n+1} = M^-1 sum_p F_p(x_{n+1}, v_{n+1/2}),    v_{n+1} = v_{n+1/2} + dt/2 a_{n+1}
@@ -15,7 +16,7 @@ on the system, ``W_ext``, likewise.  Since ``KE_n+1 - KE_n = sum_p 1/2 (F_p,n + 
 up to the ``O(dt^2)`` term of the scheme, ``KE + sum_p (-W_p) = W_ext``: every family's
 absorbed energy ``-W_p`` (internal energy, frictional and cohesive dissipation, penalty
 energy, damping) is reported and the balance error ``|KE + sum_p (-W_p) - W_ext|`` is
-monitored.  A run stops with :class:`harnesspipe.fe.explicit.ExplicitError` as soon as
+monitored.  A run stops with :class:`ExplicitError` as soon as
 the state is not finite, the balance error exceeds its tolerance or a displacement
 exceeds its bound; it then returns nothing.
 
@@ -43,7 +44,44 @@ import numpy as np
 import pandas as pd
 from numba import njit
 
-from harnesspipe.fe.explicit import ExplicitError
+
+class ExplicitError(RuntimeError):
+    """The explicit run blew up (energy balance, displacement or non-finite state)."""
+
+    def __init__(self, reason: str, step: int, time: float, ke: float, ie: float, w_ext: float,
+                 dt: float):
+        self.reason, self.step, self.time = reason, step, time
+        self.ke, self.ie, self.w_ext, self.dt = ke, ie, w_ext, dt
+        super().__init__(
+            f"explicit run stopped: {reason} at step {step}, t = {time:.6g} s (dt = {dt:.4g} s); "
+            f"KE = {ke:.6g}, IE = {ie:.6g}, W_ext = {w_ext:.6g}, "
+            f"W_ext - KE - IE = {w_ext - ke - ie:.6g} (N mm: dissipated or held by contacts "
+            f"and ties)")
+
+
+def smooth_step(x: float):
+    """Amplitude S, dS/dx, d2S/dx2 of ``10 x^3 - 15 x^4 + 6 x^5`` (clamped to [0, 1])."""
+    if x <= 0.0:
+        return 0.0, 0.0, 0.0
+    if x >= 1.0:
+        return 1.0, 0.0, 0.0
+    return (x**3 * (10.0 - 15.0 * x + 6.0 * x * x),
+            30.0 * x * x * (1.0 - x) ** 2,
+            60.0 * x * (1.0 - x) * (1.0 - 2.0 * x))
+
+
+def smooth_step_time(r: float) -> float:
+    """The x in [0, 1] at which the smooth step reaches ``S(x) = r`` (bisection: S increases)."""
+    if not 0.0 <= r <= 1.0:
+        raise ValueError(f"smooth step level {r} outside [0, 1]")
+    lo, hi = 0.0, 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if smooth_step(mid)[0] < r:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
 
 
 @njit(cache=True)

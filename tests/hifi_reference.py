@@ -1,8 +1,9 @@
 """The bundle's forces kernel by kernel: each family's parallel kernel called on its own,
-one after the other, as before the concurrent lanes (:mod:`harnesspipe.fe.bundle_lanes`).
+one after the other, as before the concurrent lanes (:mod:`harnesspipe.fe.assembly.lanes`).
 
 The lanes must give these forces and histories bit for bit (tests/test_bundle_lanes.py),
-and the benchmark times each family with them (bench/bench_hifi.py).  Not used by a run.
+and the benchmark times each family with them (bench/bench_hifi.py).  Not used by a run:
+it lives with the tests.
 """
 from __future__ import annotations
 
@@ -10,8 +11,12 @@ import time
 
 import numpy as np
 
-from harnesspipe.fe import contact_explicit as ce
-from harnesspipe.fe.shell_bt import HOURGLASS_COEF, shell_forces
+from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_beam, cohesive_ties_quad
+from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact
+from harnesspipe.fe.contact.node_facet import node_facet_contact
+from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact
+from harnesspipe.fe.contact.wire_wire import beam_beam_contact
+from harnesspipe.fe.elements.shell_bt import HOURGLASS_COEF, shell_forces
 
 FAMILY_KERNELS = ("beams", "shells", "wire-wire contact", "node-facet contact",
                   "cohesive ties", "pins")
@@ -37,7 +42,7 @@ def restore_histories(s, saved: list) -> None:
 
 
 def separate_forces(s, v, dt, seconds: dict | None = None):
-    """The forces of :meth:`harnesspipe.models.hifi.BundleSystem._bundle_forces` of the
+    """The forces of :meth:`harnesspipe.models.hifi_bundle.BundleSystem._bundle_forces` of the
     pinned bundle ``s`` (a :class:`~harnesspipe.models.hifi.HifiSystem`) into a new
     (6, n, 6) array, family kernel by family kernel; returns it and the number of active
     contacts.  With ``seconds``, each kernel's wall time is added to it under its
@@ -50,12 +55,12 @@ def separate_forces(s, v, dt, seconds: dict | None = None):
     shell_forces(s.x, v, s.sconn, s.sthick, s.smat, s.sstate, dt, s.s_el, F[0],
                  HOURGLASS_COEF, -1.0)
     clock.lap("shells")
-    n = ce.beam_beam_contact(s.x, v, s.seg, s.seg_r, s.seg_body, s.ww_pairs, s.k_ww, s.k_ww,
+    n = beam_beam_contact(s.x, v, s.seg, s.seg_r, s.seg_body, s.ww_pairs, s.k_ww, s.k_ww,
                              itf["mu_s"], itf["mu_k"], itf["d_c"], dt, s.time_scale,
                              s.ww_hist[0], s.ww_hist[1], F[1], F[2])
     clock.lap("wire-wire contact")
     for fs in s.facet_sets:
-        n += ce.node_facet_contact(s.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"],
+        n += node_facet_contact(s.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"],
                                    fs["sign"], fs["pairs"], fs["k"], fs["k"], *fs["mu"], dt,
                                    s.time_scale, fs["pen_max"], fs["hist"][0], fs["hist"][1],
                                    F[1], F[2])
@@ -81,12 +86,12 @@ class _Clock:
 def _ties(s, itf, v, f):
     for t in s.ties:
         if t["kind"] == "quad":
-            ce.cohesive_ties_quad(s.x, v, t["tie_node"], t["tie_quad"], t["tie_xi"],
+            cohesive_ties_quad(s.x, v, t["tie_node"], t["tie_quad"], t["tie_xi"],
                                   t["tie_sign"], t["tie_off"], t["tie_area"], t["tie_c"],
                                   t["quads"], s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"],
                                   t["tie_kappa"], t["tie_D"], t["tie_energy"], f)
         else:
-            ce.cohesive_ties_beam(s.x, v, s.quat, t["tie_node"], t["tie_seg"], t["tie_s"],
+            cohesive_ties_beam(s.x, v, s.quat, t["tie_node"], t["tie_seg"], t["tie_s"],
                                   t["tie_anchor"], t["tie_arm"], t["tie_axis"], t["tie_area"],
                                   t["tie_c"], s.seg, s.K_coh, s.delta0, itf["delta_f"],
                                   itf["alpha_d"], t["tie_kappa"], t["tie_D"], t["tie_energy"], f)
@@ -95,11 +100,11 @@ def _ties(s, itf, v, f):
 def _pins(s, v, dt, F) -> int:
     p, w = s.pins, s.wire_pins
     p.force[...] = 0.0
-    n = ce.chain_cylinder_contact(s.x, v, s.seg, s.seg_r, w["start"], w["mu"], p.centres, p.axes,
+    n = chain_cylinder_contact(s.x, v, s.seg, s.seg_r, w["start"], w["mu"], p.centres, p.axes,
                                   p.radii, p.velocity, w["k"], w["k"], dt, w["hist"], F[3], F[4],
                                   p.force)
     for g in s.pin_groups:
-        n += ce.facets_cylinder_contact(s.x, v, g["quads"], g["t"], g["mu"], p.centres, p.axes,
+        n += facets_cylinder_contact(s.x, v, g["quads"], g["t"], g["mu"], p.centres, p.axes,
                                         p.radii, g["slack"], p.velocity, g["k"], g["k"], dt,
                                         g["hist_q"], g["hist"], F[3], F[4], p.force)
     return n

@@ -36,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.beam import corotated_frame, local_rotation, scatter_element
+from harnesspipe.fe.elements.beam import corotated_frame, local_rotation, scatter_element
 from harnesspipe.fe.rotation import quat_mul, quat_to_matrix, rotate_spatial, rotvec_from_quat
 
 NEWTON_IT = 20

@@ -1,8 +1,8 @@
 """Co-rotational fibre beams for explicit dynamics: parallel internal force, lumped
 mass with rotary-inertia scaling and the element stable step.
 
-The element is the one of :mod:`harnesspipe.fe.beam` (Battini & Pacoste 2002;
-:func:`harnesspipe.fe.beam.element_response` without its tangent).  Here it is
+The element is the one of :mod:`harnesspipe.fe.elements.beam` (Battini & Pacoste 2002;
+:func:`harnesspipe.fe.elements.beam.element_response` without its tangent).  Here it is
 evaluated for many bodies at once -- the wires of a bundle -- each element with its
 own section (``sec_id``: fibre coordinates and areas of the wire type) and its own
 eq. 2 material (``mat_id``: rows ``(E, sigma_y, K, n)`` of ``mats``).  The element
@@ -19,7 +19,7 @@ dofs would limit the explicit step far below the axial bar limit; the lower boun
 usual rotary-inertia scaling of explicit beam elements (Hughes & Liu 1981;
 Belytschko, Liu & Moran 2014, sec. 6.3): it changes only the rotational dynamics,
 which carry no energy in a quasi-static bending run.  The scalar inertia keeps the
-spatial Euler equations free of gyroscopic terms (see :mod:`harnesspipe.fe.explicit`).
+spatial Euler equations free of gyroscopic terms (see :mod:`harnesspipe.fe.solvers.central_difference`).
 
 Stable step per element: ``dt_e = 2 / omega_e``, ``omega_e^2`` the Gershgorin bound of
 ``M_e^-1/2 K_e M_e^-1/2`` for the elastic local Bernoulli stiffness (EA/l, 12EI/l^3,
@@ -32,10 +32,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from harnesspipe.fe.beam import element_response
-from harnesspipe.fe.hardening import positive_pow, return_map_from
-from harnesspipe.fe.rotation import ts_inverse_coeff, log_matrix
-
+from harnesspipe.fe.elements.beam import (FibreHistory, FibreMaterial, FibreSection, beam_work,
+                                          element_response)
+from harnesspipe.fe.materials.hardening import positive_pow, return_map_from
+from harnesspipe.fe.rotation import log_matrix, ts_inverse_coeff
 
 PARALLEL_MIN_EL = 64   # fewer elements per thread than this: one chunk (thread overhead)
 
@@ -46,10 +46,10 @@ def _section_force(e0, kappa_y, kappa_z, y, z, area, eps_p, alpha, sa_h, e, g, E
     """Stress resultants ``(N, M_y, M_z)`` of the fibre section, no tangent.
 
     The fibre strain, eq. 2 return and summation order of
-    :func:`harnesspipe.fe.fiber.section_response`; the section tangent ``D`` is not formed,
+    :func:`harnesspipe.fe.materials.fiber.section_response`; the section tangent ``D`` is not formed,
     and each fibre keeps ``sa = alpha**n`` in its history, so its flow stress
     ``sigma_Y + K sa`` (the elastic check) and the return map's start need no power
-    (:func:`harnesspipe.fe.hardening.return_map_from`): the same results up to round-off.
+    (:func:`harnesspipe.fe.materials.hardening.return_map_from`): the same results up to round-off.
     History of element ``e``, Gauss point ``g``: ``eps_p, alpha, sa_h`` read and, for a
     fibre that yields, updated in place (an explicit step is never rejected, so there is
     no trial state; an elastic fibre's history is only read).
@@ -89,31 +89,11 @@ def _ts_inv_t_apply(th, m0, m1, m2):
     return r0, r1, r2
 
 
-@njit(cache=True)
-def element_force(e, a, b, X0, x, R0, Rg, ia, ib, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n,
-                  eps_p, alpha, sa_h, f_el, W, Rbar, th1, th2, v4):
-    """Global internal force ``f_el[e]`` (12) of element ``e`` (nodes ``a, b``), lean path.
-
-    Equals ``element_response(..., want_tangent=False)`` of :mod:`harnesspipe.fe.beam`;
-    ``Rg[ia]``, ``Rg[ib]`` hold the nodal rotation matrices (quat_to_matrix of
-    ``quat[a]``, ``quat[b]``).  The co-rotated frame, the local rotations, the fibre
-    resultants and the new history use the arithmetic of element_response
-    (bit-identical); only the final mapping differs in round-off, because only what the
-    force needs is formed:
-
-    * ``Rg R0`` once per node (element_response forms it once per entry of Rr^T Rg R0);
-    * ``f_a = B_a^T f_l`` with ``Ts^-T m = m + (theta x m)/2 + c (theta (theta.m) - a^2 m)``
-      as a vector (no Ts^-1 matrix);
-    * ``f_g = B^T f_a`` from the ten nonzeros of ``G^T`` in closed form: with
-      ``m = m1 + m2``, ``g = G^T m``, the local blocks ``-g_u1, m1 - g_w1, -g_u2, m2 - g_w2``
-      are rotated by ``Rr`` and the axial force ``N r1`` is added to the translations
-      (no 7x12 B matrix);
-    * no section tangent D, no K_l, K_a, K_h, K_m.
-
-    Arrays are indexed in place (no per-element views).  Work: W (4, 3, 3) holding
-    Rg1 R0, Rg2 R0, Rr, qv; Rbar (3, 3), th1, th2 (3), v4 (4).
-    """
-    # P_i = Rg_i R0 (order of local_rotation), q1, q2 = its 2nd columns (corotated_frame)
+@njit(cache=True, inline="always")
+def _nodal_triads(e, R0, Rg, ia, ib, W):
+    """``P_i = Rg_i R0`` of element ``e`` into ``W[0]``, ``W[1]`` (the order of
+    :func:`harnesspipe.fe.elements.beam.local_rotation`): the nodal triads carried by the
+    nodal rotations ``Rg[ia]``, ``Rg[ib]`` (3, 3) from the initial frame ``R0[e]``."""
     for k in range(3):
         for j in range(3):
             t1 = 0.0
@@ -123,7 +103,15 @@ def element_force(e, a, b, X0, x, R0, Rg, ia, ib, xi_g, w_g, y, z, area, GJ, E, 
                 t2 += Rg[ib, k, m] * R0[e, m, j]
             W[0, k, j] = t1
             W[1, k, j] = t2
-    # co-rotated frame (arithmetic of harnesspipe.fe.beam.corotated_frame)
+
+
+@njit(cache=True, inline="always")
+def _corotated_frame(x, a, b, W):
+    """Co-rotated frame ``Rr = [r1 r2 r3]`` into ``W[2]`` (Battini & Pacoste 2002; the
+    arithmetic of :func:`harnesspipe.fe.elements.beam.corotated_frame`): ``r1`` along the
+    current chord ``x[b] - x[a]``, ``r3`` normal to ``r1`` and the mean ``q`` of the
+    nodal ``y`` axes ``q1, q2`` (2nd columns of ``W[0]``, ``W[1]``), ``r2 = r3 x r1``;
+    ``W[3]`` receives the columns ``q1, q2, q``.  Returns the current length ``l_n``."""
     ln = 0.0
     for i in range(3):
         W[2, i, 0] = x[b, i] - x[a, i]
@@ -153,18 +141,34 @@ def element_force(e, a, b, X0, x, R0, Rg, ia, ib, xi_g, w_g, y, z, area, GJ, E, 
     W[2, 0, 1] = c1 * r12 - c2 * r11
     W[2, 1, 1] = c2 * r10 - c0 * r12
     W[2, 2, 1] = c0 * r11 - c1 * r10
-    l0 = np.sqrt((X0[b, 0] - X0[a, 0]) ** 2 + (X0[b, 1] - X0[a, 1]) ** 2
-                 + (X0[b, 2] - X0[a, 2]) ** 2)
-    # local rotations theta_i = log(Rr^T P_i) (arithmetic of local_rotation)
-    for node in range(2):
-        for i in range(3):
-            for j in range(3):
-                acc = 0.0
-                for k in range(3):
-                    acc += W[2, k, i] * W[node, k, j]
-                Rbar[i, j] = acc
-        log_matrix(Rbar, th1 if node == 0 else th2, v4)
-    # local force f_l (as local_bernoulli, same summation order)
+    return ln
+
+
+@njit(cache=True, inline="always")
+def _local_rotation(W, node, Rbar, theta, v4):
+    """Local rotation vector ``theta = log(Rr^T P)`` (3,) of node ``node`` (the arithmetic of
+    :func:`harnesspipe.fe.elements.beam.local_rotation`), ``Rr = W[2]``, ``P = W[node]``.
+    Work: Rbar (3, 3), v4 (4,)."""
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                acc += W[2, k, i] * W[node, k, j]
+            Rbar[i, j] = acc
+    log_matrix(Rbar, theta, v4)
+
+
+@njit(cache=True, inline="always")
+def _local_force(e, ln, l0, th1, th2, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n, eps_p,
+                 alpha, sa_h):
+    """Local force of the small-strain Bernoulli element (the arithmetic and summation
+    order of :func:`harnesspipe.fe.elements.beam.local_bernoulli`): the axial force N and
+    the bending moments at the nodes ``(f2, f3)``, ``(f5, f6)`` from the fibre resultants
+    (:func:`_section_force`) integrated over the Gauss-Lobatto points ``xi_g, w_g``
+    (ng,) with the strains ``e0 = (l_n - l_0)/l_0``, ``kappa = ((6 xi - 4) theta_1 +
+    (6 xi - 2) theta_2)/l_0``, and the elastic torque ``GJ (theta_2x - theta_1x)/l_0``.
+    Fibre section ``y, z, area`` (nf,); history of element ``e`` in ``eps_p, alpha, sa_h``
+    (n_el, ng, nf).  Returns (N, f2, f3, f5, f6, torque)."""
     f0 = f2 = f3 = f5 = f6 = 0.0
     e0 = (ln - l0) / l0
     inv_l0 = 1.0 / l0
@@ -182,12 +186,19 @@ def element_force(e, a, b, X0, x, R0, Rg, ia, ib, xi_g, w_g, y, z, area, GJ, E, 
         f5 += (wl * b2) * s1
         f3 += (wl * b1) * s2
         f6 += (wl * b2) * s2
-    torque = GJ / l0 * (th2[0] - th1[0])
-    # f_a = B_a^T f_l
-    N = f0
+    return f0, f2, f3, f5, f6, GJ / l0 * (th2[0] - th1[0])
+
+
+@njit(cache=True, inline="always")
+def _global_force(e, f_el, W, ln, th1, th2, N, f2, f3, f5, f6, torque):
+    """Global nodal forces ``f_el[e]`` (12) from the local force: ``f_a = B_a^T f_l``
+    (Ts^-T applied as a vector, :func:`_ts_inv_t_apply`), then ``f_g = B^T f_a`` with the
+    nonzeros of ``G^T`` (:func:`harnesspipe.fe.elements.beam._g_matrix`) in closed form:
+    with ``m = m1 + m2`` and ``g = G^T m`` the local blocks ``-g_u1, m1 - g_w1, -g_u2,
+    m2 - g_w2`` rotated by ``Rr = W[2]`` (``qv = W[3]``), the axial force ``N r1`` added
+    to the translations."""
     m10, m11, m12 = _ts_inv_t_apply(th1, -torque, f2, f3)
     m20, m21, m22 = _ts_inv_t_apply(th2, torque, f5, f6)
-    # g = G^T m, m = m1 + m2 (the nonzeros of G^T of harnesspipe.fe.beam._g_matrix)
     M1 = m10 + m20
     M2 = m11 + m21
     M3 = m12 + m22
@@ -216,6 +227,42 @@ def element_force(e, a, b, X0, x, R0, Rg, ia, ib, xi_g, w_g, y, z, area, GJ, E, 
         f_el[e, 6 + i] = r0 * N + tu
         f_el[e, 3 + i] = r0 * w10 + r1 * w11 + r2 * m12
         f_el[e, 9 + i] = r0 * w20 + r1 * w21 + r2 * m22
+
+
+@njit(cache=True)
+def element_force(e, a, b, X0, x, R0, Rg, ia, ib, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n,
+                  eps_p, alpha, sa_h, f_el, W, Rbar, th1, th2, v4):
+    """Global internal force ``f_el[e]`` (12) of element ``e`` (nodes ``a, b``), lean path.
+
+    Equals ``element_response(..., want_tangent=False)`` of :mod:`harnesspipe.fe.elements.beam`;
+    ``Rg[ia]``, ``Rg[ib]`` hold the nodal rotation matrices (quat_to_matrix of
+    ``quat[a]``, ``quat[b]``).  The co-rotated frame, the local rotations, the fibre
+    resultants and the new history use the arithmetic of element_response
+    (bit-identical); only the final mapping differs in round-off, because only what the
+    force needs is formed:
+
+    * ``Rg R0`` once per node (element_response forms it once per entry of Rr^T Rg R0);
+    * ``f_a = B_a^T f_l`` with ``Ts^-T m = m + (theta x m)/2 + c (theta (theta.m) - a^2 m)``
+      as a vector (no Ts^-1 matrix);
+    * ``f_g = B^T f_a`` from the ten nonzeros of ``G^T`` in closed form (no 7x12 B matrix);
+    * no section tangent D, no K_l, K_a, K_h, K_m.
+
+    ``X0``/``x`` (n_nodes, 3) reference and current positions, ``R0`` (n_el, 3, 3)
+    initial frames, ``Rg`` (2, 3, 3), ``xi_g, w_g`` (ng,), fibre section ``y, z, area``
+    (nf,) and ``GJ``, eq. 2 material ``E, sigma_y, K, n``, history ``eps_p, alpha, sa_h``
+    (n_el, ng, nf) updated in place where a fibre yields, ``f_el`` (n_el, 12).  Arrays
+    are indexed in place (no per-element views).  Work: W (4, 3, 3) holding Rg1 R0,
+    Rg2 R0, Rr, qv; Rbar (3, 3), th1, th2 (3), v4 (4).
+    """
+    _nodal_triads(e, R0, Rg, ia, ib, W)
+    ln = _corotated_frame(x, a, b, W)
+    l0 = np.sqrt((X0[b, 0] - X0[a, 0]) ** 2 + (X0[b, 1] - X0[a, 1]) ** 2
+                 + (X0[b, 2] - X0[a, 2]) ** 2)
+    _local_rotation(W, 0, Rbar, th1, v4)
+    _local_rotation(W, 1, Rbar, th2, v4)
+    N, f2, f3, f5, f6, torque = _local_force(e, ln, l0, th1, th2, xi_g, w_g, y, z, area, GJ, E,
+                                             sigma_y, K, n, eps_p, alpha, sa_h)
+    _global_force(e, f_el, W, ln, th1, th2, N, f2, f3, f5, f6, torque)
 
 
 @njit(cache=True, inline="always")
@@ -312,7 +359,7 @@ def beam_forces_reference(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_ar
                           sec_id, mats, mat_id, eps_p_c, alpha_c, sa_c, eps_p_t, alpha_t, sa_t,
                           f_el, f_int, n_chunks):
     """Reference for :func:`beam_forces` through ``element_response(want_tangent=False)`` of
-    :mod:`harnesspipe.fe.beam` (kept for tests and benchmarks; same arguments).
+    :mod:`harnesspipe.fe.elements.beam` (kept for tests and benchmarks; same arguments).
 
     ``X0``/``x`` (n_nodes, 3) reference and current positions, ``quat`` (n_nodes, 4) nodal
     rotations, ``conn`` (n_el, 2) global node ids, ``R0`` (n_el, 3, 3) initial frames;
@@ -325,20 +372,7 @@ def beam_forces_reference(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_ar
     n_el = conn.shape[0]
     n_chunks = max(1, min(n_chunks, n_el))
     for c in prange(n_chunks):
-        M33 = np.empty((10, 3, 3))
-        V3 = np.empty((6, 3))
-        v4 = np.empty(4)
-        fl = np.empty(7)
-        fa = np.empty(7)
-        Kl = np.empty((7, 7))
-        Ka = np.empty((7, 7))
-        s = np.empty(3)
-        D = np.empty((3, 3))
-        B = np.empty((3, 7))
-        Gt = np.empty((3, 12))
-        Bg = np.empty((7, 12))
-        t12 = np.empty((11, 12))
-        W77 = np.empty((7, 7))
+        work = beam_work()
         Ke = np.empty((12, 12))
         for e in range(c, n_el, n_chunks):
             a = conn[e, 0]
@@ -346,10 +380,10 @@ def beam_forces_reference(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_ar
             k = sec_id[e]
             m = mat_id[e]
             element_response(X0[a], X0[b], R0[e], x[a], x[b], quat[a], quat[b], xi_g, w_g,
-                             sec_y[k], sec_z[k], sec_area[k], sec_GJ[k], mats[m, 0], mats[m, 1],
-                             mats[m, 2], mats[m, 3], False, eps_p_c[e], alpha_c[e], eps_p_t[e],
-                             alpha_t[e], False, f_el[e], Ke, M33, V3, v4, fl, Kl, fa, Ka, s, D,
-                             B, Gt, Bg, t12, W77)
+                             FibreSection(sec_y[k], sec_z[k], sec_area[k], sec_GJ[k]),
+                             FibreMaterial(mats[m, 0], mats[m, 1], mats[m, 2], mats[m, 3]), False,
+                             FibreHistory(eps_p_c[e], alpha_c[e], eps_p_t[e], alpha_t[e]), False,
+                             f_el[e], Ke, work)
             for g in range(alpha_t.shape[1]):
                 for f in range(alpha_t.shape[2]):
                     al = alpha_t[e, g, f]

@@ -10,7 +10,7 @@ Crisfield 1997, vol. 2, ch. 17), without warping:
   nodal ``y`` axes; local rotations are ``theta_i = log(Rr^T R_i R0)``;
 * local element: small-strain Bernoulli beam (linear axial, cubic Hermite bending)
   with ``u = l_n - l_0``, integrated by Gauss-Lobatto points along the length and
-  the fibre section of :mod:`harnesspipe.fe.fiber` at each point;
+  the fibre section of :mod:`harnesspipe.fe.materials.fiber` at each point;
 * ``f_g = B^T f_a`` and ``K_g = B^T K_a B + K_m`` with the geometric terms K_h
   (change of Ts^-1 with theta) and K_m (change of the frame) of Battini & Pacoste.
 
@@ -19,20 +19,75 @@ Local degrees of freedom ``q_l = (u, theta_1 (3), theta_2 (3))``; global per nod
 strain per element, Gauss point and fibre) are read from the committed arrays and
 written to trial arrays; the caller commits them on a converged increment.
 
-All work arrays are allocated once per assembly call, never per element.
+All work arrays are allocated once per assembly call, never per element.  The element
+takes its section, material, history and work arrays as named groups
+(:class:`FibreSection`, :class:`FibreMaterial`, :class:`FibreHistory`, :class:`BeamWork`).
 """
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.fiber import section_response
+from harnesspipe.fe.materials.fiber import section_response
 from harnesspipe.fe.rotation import kh_matrix, log_matrix, quat_to_matrix, skew, ts_inv
 
 NDOF_NODE = 6
 NDOF_ELEM = 12
 BANDWIDTH = 2 * NDOF_NODE - 1  # half bandwidth of a chain of two-node elements
 STRAIN_DOFS = ((0, 0), (2, 5), (3, 6))  # local dofs of e0 (u; 2nd coefficient 0), kappa_y, kappa_z
+
+
+class FibreSection(NamedTuple):
+    """Fibre section of an element (:mod:`harnesspipe.fe.materials.fiber`)."""
+    y: np.ndarray           # (nf,) fibre coordinates in the section
+    z: np.ndarray           # (nf,)
+    area: np.ndarray        # (nf,) fibre areas
+    GJ: float               # torsional stiffness (elastic torsion)
+
+
+class FibreMaterial(NamedTuple):
+    """Eq. 2 J2 material of the fibres."""
+    E: float
+    sigma_y: float
+    K: float
+    n: float
+
+
+class FibreHistory(NamedTuple):
+    """Fibre history of one element: committed arrays read, trial arrays written."""
+    eps_p_old: np.ndarray   # (ng, nf) signed plastic strain
+    alpha_old: np.ndarray   # (ng, nf) accumulated plastic strain
+    eps_p_new: np.ndarray   # (ng, nf)
+    alpha_new: np.ndarray   # (ng, nf)
+
+
+class BeamWork(NamedTuple):
+    """Work arrays of :func:`element_response`."""
+    M33: np.ndarray         # (10, 3, 3) nodal and frame rotations, Ts^-1, K_h, work
+    V3: np.ndarray          # (6, 3) local rotations, K_h moments, nodal positions
+    v4: np.ndarray          # (4,) log_matrix work
+    fl: np.ndarray          # (7,) local force
+    Kl: np.ndarray          # (7, 7) local tangent
+    fa: np.ndarray          # (7,) force conjugate to the local rotation vectors
+    Ka: np.ndarray          # (7, 7) its tangent
+    s: np.ndarray           # (3,) section resultants
+    D: np.ndarray           # (3, 3) section tangent
+    B: np.ndarray           # (3, 7) strain coefficients
+    Gt: np.ndarray          # (3, 12) G^T
+    Bg: np.ndarray          # (7, 12) B
+    t12: np.ndarray         # (11, 12) tangent work
+    W77: np.ndarray         # (7, 7) tangent work
+
+
+@njit(cache=True, inline="always")
+def beam_work():
+    """A fresh :class:`BeamWork` (inlined: the caller sees the allocations)."""
+    return BeamWork(np.empty((10, 3, 3)), np.empty((6, 3)), np.empty(4), np.empty(7),
+                    np.empty((7, 7)), np.empty(7), np.empty((7, 7)), np.empty(3),
+                    np.empty((3, 3)), np.empty((3, 7)), np.empty((3, 12)), np.empty((7, 12)),
+                    np.empty((11, 12)), np.empty((7, 7)))
 
 
 def lobatto_points(n_gauss: int = 3):
@@ -113,9 +168,10 @@ def local_rotation(Rr, Rg, R0, Rbar, theta, work4):
 
 
 @njit(cache=True)
-def local_bernoulli(u, th1, th2, l0, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n, elastic,
-                    eps_p_old, alpha_old, eps_p_new, alpha_new, fl, Kl, s, D, B):
-    """Local force fl (7) and tangent Kl (7x7) of the small-strain Bernoulli element.
+def local_bernoulli(u, th1, th2, l0, xi_g, w_g, sec, mat, elastic, hist, fl, Kl, s, D, B):
+    """Local force fl (7) and tangent Kl (7x7) of the small-strain Bernoulli element
+    (section ``sec``, material ``mat``, history ``hist``: :class:`FibreSection`,
+    :class:`FibreMaterial`, :class:`FibreHistory`).
 
     Generalised strains at xi: e0 = u/l0, kappa_y = ((6xi-4) th1_y + (6xi-2) th2_y)/l0,
     kappa_z likewise with the z rotations; torsion elastic, GJ (th2_x - th1_x)/l0.
@@ -134,8 +190,9 @@ def local_bernoulli(u, th1, th2, l0, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n
         b2 = (6.0 * xi - 2.0) / l0
         ky = b1 * th1[1] + b2 * th2[1]
         kz = b1 * th1[2] + b2 * th2[2]
-        section_response(e0, ky, kz, y, z, area, eps_p_old[g], alpha_old[g],
-                         eps_p_new[g], alpha_new[g], E, sigma_y, K, n, elastic, s, D)
+        section_response(e0, ky, kz, sec.y, sec.z, sec.area, hist.eps_p_old[g],
+                         hist.alpha_old[g], hist.eps_p_new[g], hist.alpha_new[g], mat.E,
+                         mat.sigma_y, mat.K, mat.n, elastic, s, D)
         wl = w_g[g] * l0
         B[0, 0] = 1.0 / l0      # nonzero coefficients of B, at the dofs STRAIN_DOFS
         B[0, 1] = 0.0
@@ -150,7 +207,7 @@ def local_bernoulli(u, th1, th2, l0, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n
                     cab = ca * D[a, b]
                     for q in range(2):
                         Kl[i, STRAIN_DOFS[b][q]] += cab * B[b, q]
-    kt = GJ / l0
+    kt = sec.GJ / l0
     torque = kt * (th2[0] - th1[0])
     fl[1] -= torque
     fl[4] += torque
@@ -216,14 +273,17 @@ def _b_matrix(Rr, Gt, Bg):
 
 
 @njit(cache=True)
-def element_response(X1, X2, R0, x1, x2, q1, q2, xi_g, w_g, y, z, area, GJ,
-                     E, sigma_y, K, n, elastic, eps_p_old, alpha_old, eps_p_new, alpha_new,
-                     want_tangent, fg, Kg, M33, V3, v4, fl, Kl, fa, Ka, s, D, B, Gt, Bg, t12, W77):
+def element_response(X1, X2, R0, x1, x2, q1, q2, xi_g, w_g, sec, mat, elastic, hist,
+                     want_tangent, fg, Kg, work):
     """Global internal force ``fg`` (12) and, if ``want_tangent``, tangent ``Kg`` (12x12).
 
-    Work arrays: M33 (10,3,3), V3 (6,3), v4 (4), fl (7), Kl, Ka, W77 (7,7), fa (7), s (3),
-    D (3,3), B (3,7), Gt (3,12), Bg (7,12), t12 (11,12).
+    ``X1, X2`` (3,) reference and ``x1, x2`` (3,) current nodes, ``R0`` (3, 3) initial
+    frame, ``q1, q2`` (4,) nodal quaternions, ``xi_g, w_g`` (ng,) Gauss-Lobatto rule on
+    [0, 1]; ``sec`` a :class:`FibreSection`, ``mat`` a :class:`FibreMaterial`,
+    ``elastic`` skips the return map, ``hist`` a :class:`FibreHistory` (trial arrays
+    written); ``work`` a :class:`BeamWork`.
     """
+    M33, V3, v4, fl, Kl, fa, Ka, s, D, B, Gt, Bg, t12, W77 = work
     Rg1 = M33[0]
     Rg2 = M33[1]
     Rr = M33[2]
@@ -242,8 +302,7 @@ def element_response(X1, X2, R0, x1, x2, q1, q2, xi_g, w_g, y, z, area, GJ,
     l0 = np.sqrt((X2[0] - X1[0]) ** 2 + (X2[1] - X1[1]) ** 2 + (X2[2] - X1[2]) ** 2)
     local_rotation(Rr, Rg1, R0, Rbar, th1, v4)
     local_rotation(Rr, Rg2, R0, Rbar, th2, v4)
-    local_bernoulli(ln - l0, th1, th2, l0, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n, elastic,
-                    eps_p_old, alpha_old, eps_p_new, alpha_new, fl, Kl, s, D, B)
+    local_bernoulli(ln - l0, th1, th2, l0, xi_g, w_g, sec, mat, elastic, hist, fl, Kl, s, D, B)
     ts_inv(th1, T1)
     ts_inv(th2, T2)
     # f_a = B_a^T f_l with B_a = diag(1, Ts^-1(th1), Ts^-1(th2))
@@ -455,33 +514,22 @@ def assemble_beams(X, conn, R0, u, quat, xi_g, w_g, y, z, area, GJ, E, sigma_y, 
     f[:] = 0.0
     if want_tangent:
         band[:, :] = 0.0
-    M33 = np.empty((10, 3, 3))
-    V3 = np.empty((6, 3))
-    v4 = np.empty(4)
-    fl = np.empty(7)
-    fa = np.empty(7)
-    Kl = np.empty((7, 7))
-    Ka = np.empty((7, 7))
-    s = np.empty(3)
-    D = np.empty((3, 3))
-    B = np.empty((3, 7))
-    Gt = np.empty((3, 12))
-    Bg = np.empty((7, 12))
-    t12 = np.empty((11, 12))
-    W77 = np.empty((7, 7))
+    sec = FibreSection(y, z, area, GJ)
+    mat = FibreMaterial(E, sigma_y, K, n)
+    work = beam_work()
     fe = np.empty(12)
     Ke = np.zeros((12, 12))
-    x1 = V3[4]
-    x2 = V3[5]
+    x1 = work.V3[4]
+    x2 = work.V3[5]
     for e in range(conn.shape[0]):
         a = conn[e, 0]
         b = conn[e, 1]
         for i in range(3):
             x1[i] = X[a, i] + u[a, i]
             x2[i] = X[b, i] + u[b, i]
-        element_response(X[a], X[b], R0[e], x1, x2, quat[a], quat[b], xi_g, w_g, y, z, area, GJ,
-                         E, sigma_y, K, n, elastic, eps_p_c[e], alpha_c[e], eps_p_t[e], alpha_t[e],
-                         want_tangent, fe, Ke, M33, V3, v4, fl, Kl, fa, Ka, s, D, B, Gt, Bg, t12, W77)
+        element_response(X[a], X[b], R0[e], x1, x2, quat[a], quat[b], xi_g, w_g, sec, mat, elastic,
+                         FibreHistory(eps_p_c[e], alpha_c[e], eps_p_t[e], alpha_t[e]),
+                         want_tangent, fe, Ke, work)
         scatter_element(a, b, fe, Ke, want_tangent, f, band, bw)
 
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.hardening import positive_pow, return_map_from
+from harnesspipe.fe.materials.hardening import positive_pow, return_map_from
 
 STATE_SIZE = 6
 P11, P22, P33, P12, EPS_BAR_P, EPS33 = range(STATE_SIZE)

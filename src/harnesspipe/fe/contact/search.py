@@ -101,12 +101,7 @@ def _register(lo_b, hi_b, origin, cell, dims):
     ids = np.empty(counts[n], dtype=np.int64)
     for j in prange(n):
         p = counts[j]
-        x0 = _cell_of(lo_b[j, 0], origin, cell, dims, 0)
-        x1 = _cell_of(hi_b[j, 0], origin, cell, dims, 0)
-        y0 = _cell_of(lo_b[j, 1], origin, cell, dims, 1)
-        y1 = _cell_of(hi_b[j, 1], origin, cell, dims, 1)
-        z0 = _cell_of(lo_b[j, 2], origin, cell, dims, 2)
-        z1 = _cell_of(hi_b[j, 2], origin, cell, dims, 2)
+        x0, x1, y0, y1, z0, z1 = _cell_range(lo_b, hi_b, j, origin, cell, dims)
         for iz in range(z0, z1 + 1):
             for iy in range(y0, y1 + 1):
                 for ix in range(x0, x1 + 1):
@@ -117,16 +112,19 @@ def _register(lo_b, hi_b, origin, cell, dims):
     return keys[order], ids[order]
 
 
+@njit(cache=True, inline="always")
+def _cell_range(lo, hi, i, origin, cell, dims):
+    """Lowest and highest grid cell of box ``i`` along x, y, z (integers)."""
+    return (_cell_of(lo[i, 0], origin, cell, dims, 0), _cell_of(hi[i, 0], origin, cell, dims, 0),
+            _cell_of(lo[i, 1], origin, cell, dims, 1), _cell_of(hi[i, 1], origin, cell, dims, 1),
+            _cell_of(lo[i, 2], origin, cell, dims, 2), _cell_of(hi[i, 2], origin, cell, dims, 2))
+
+
 @njit(cache=True)
 def _query(i, lo_a, hi_a, lo_b, hi_b, keys, ids, origin, cell, dims, same_set, out, start):
     """Count (out is None-like: start < 0) or write the pairs of box i of A."""
     npair = 0
-    x0 = _cell_of(lo_a[i, 0], origin, cell, dims, 0)
-    x1 = _cell_of(hi_a[i, 0], origin, cell, dims, 0)
-    y0 = _cell_of(lo_a[i, 1], origin, cell, dims, 1)
-    y1 = _cell_of(hi_a[i, 1], origin, cell, dims, 1)
-    z0 = _cell_of(lo_a[i, 2], origin, cell, dims, 2)
-    z1 = _cell_of(hi_a[i, 2], origin, cell, dims, 2)
+    x0, x1, y0, y1, z0, z1 = _cell_range(lo_a, hi_a, i, origin, cell, dims)
     nk = keys.shape[0]
     for iz in range(z0, z1 + 1):
         for iy in range(y0, y1 + 1):

@@ -8,7 +8,7 @@ I = pi r^4 / 4); plastic resultants converge as the rule is refined.
 
 Fibre law: 1D return mapping of J2 plasticity with the isotropic power-law
 hardening of eq. 2 (sigma_Y + K eps_p^n), no kinematic hardening; the scalar
-return is :func:`harnesspipe.fe.hardening.return_map` with ``c = E``;
+return is :func:`harnesspipe.fe.materials.hardening.return_map` with ``c = E``;
 the consistent tangent is ``E H / (E + H)`` with ``H`` the hardening slope
 (Simo & Hughes 1998, sec. 1.4).  Shear and torsion stay elastic.  Since the flow
 stress never falls below sigma_Y, a fibre whose trial stress is within +-sigma_Y is
@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.hardening import return_map
+from harnesspipe.fe.materials.hardening import return_map
 
 
 def disc_fibres(radius: float, n_rings: int = 4, n_sectors: int = 16):

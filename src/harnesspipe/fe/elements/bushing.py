@@ -1,6 +1,18 @@
-"""Kernels of the branch ROM (Sec. 5): the finite-rotation bushing and the strand truss.
+"""The finite-rotation bushing of the branch break-out joint (Sec. 5, eqs. 14-15).
 
-Bushing (eqs. 14-15).  Node ``a`` carries the connector frame ``E0`` (columns:
+Two nodes joined by three translational and three rotational springs acting on their
+relative displacement and rotation in the connector frame (axis 1 along the branch).
+Stiffnesses (:func:`bushing_stiffness`) from the effective TWB properties by eq. 14
+with the aspect ratio lambda = l / r:
+
+    k = E A / (lambda l),   k_beta = E I / (lambda l),   k_theta = G J / (lambda l)
+
+The two transverse translational stiffnesses are not given by eq. 14; they are
+taken as the shear analogue G A / (lambda l) (assumption, documented in config).
+Damping is stiffness proportional, C = alpha K (eq. 15), so the connector is a
+Kelvin-Voigt element: s = K (d + alpha d_dot).
+
+Kinematics (:func:`bushing_response`).  Node ``a`` carries the connector frame ``E0`` (columns:
 axis 1 along the break-out TWB, axes 2 and 3 across it), which rotates with the
 node.  The six relative motions, in that frame, are
 
@@ -8,31 +20,41 @@ node.  The six relative motions, in that frame, are
     d_r = E0^T log(R_a^T R_b)                          (rotations: torsion, two bendings)
 
 so a rigid motion of the pair strains nothing, also for finite rotations (the
-Cartesian and flexion-torsion measures of a bushing).  The connector force is
-Kelvin-Voigt, ``s = K (d + alpha d_dot)`` with the diagonal K of eq. 14 and
-C = alpha K of eq. 15.  The rate ``d_dot`` comes from the Newmark relations of
+Cartesian and flexion-torsion measures of a bushing).  The rate ``d_dot`` comes from the Newmark relations of
 the time integrator applied to d itself,
 
     d_dot = c_d (d - d_n) + c_v d_dot_n + c_a d_ddot_n,
 
 which equals B v for small motions and stays objective for large ones; the
-coefficients are the integrator's (``harnesspipe.fe.newmark_band``).  Hence
+coefficients are the integrator's (``harnesspipe.fe.solvers.newmark``).  Hence
 ds/dd = (1 + alpha c_d) K.  Nodal forces are f = B^T s with
 B = dd/d(x_a, w_a, x_b, w_b) (spatial spins w); the tangent is B^T (ds/dd) B plus
 the geometric terms of R_a and of the log map (``kh_matrix``).  The damping
 force's dependence on the displacement through B in the tangent is exact because
 the rate is a function of d only.
-
-Strand: a co-rotational truss (axial force only) of the aramid strand H.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
 
 from harnesspipe.fe.rotation import kh_matrix, log_matrix, quat_to_matrix, skew, ts_inv
 
-NDOF_NODE = 6
+
+def bushing_stiffness(E: float, G: float, r: float, l: float) -> np.ndarray:
+    """Diagonal stiffnesses [k, k_s, k_s, k_theta, k_beta, k_beta] of eq. 14.
+
+    Order: axial, two transverse translations, torsion, two bending rotations.
+    A = pi r^2, I = pi r^4 / 4, J = pi r^4 / 2 of the circumscribing circle.
+    """
+    if min(E, G, r, l) <= 0.0:
+        raise ValueError(f"bushing_stiffness: E, G, r, l must be > 0 (got {E}, {G}, {r}, {l})")
+    lam_l = (l / r) * l
+    A, I, J = math.pi * r**2, math.pi * r**4 / 4.0, math.pi * r**4 / 2.0
+    return np.array([E * A, G * A, G * A, G * J, E * I, E * I]) / lam_l
+
 
 
 @njit(cache=True)
@@ -169,43 +191,3 @@ def _bushing_tangent(Ra, E0, Tinv, theta, dx, g, h, m, k_diag, rate_factor, K):
             K[9 + i, 3 + j] -= G + Sh[i, j]
             K[3 + i, 9 + j] -= G
             K[3 + i, 3 + j] += G + Sh[i, j]
-
-
-@njit(cache=True)
-def truss_response(xa, xb, L0, EA, f, K):
-    """Co-rotational truss: axial force N = EA (l - L0)/L0 along e = (x_b - x_a)/l.
-
-    f = N (-e, e) on the translations of a and b; K = EA/L0 e e^T + N/l (I - e e^T)
-    in the (a, b) translational blocks (12-dof layout, rotations untouched).
-    Returns N.
-    """
-    e = xb - xa
-    length = np.sqrt(e[0] ** 2 + e[1] ** 2 + e[2] ** 2)
-    e /= length
-    N = EA * (length - L0) / L0
-    for i in range(12):
-        f[i] = 0.0
-        for j in range(12):
-            K[i, j] = 0.0
-    for i in range(3):
-        f[i] = -N * e[i]
-        f[6 + i] = N * e[i]
-        for j in range(3):
-            k = EA / L0 * e[i] * e[j] + N / length * ((1.0 if i == j else 0.0) - e[i] * e[j])
-            K[i, j] = k
-            K[6 + i, 6 + j] = k
-            K[i, 6 + j] = -k
-            K[6 + i, j] = -k
-    return N
-
-
-@njit(cache=True)
-def scatter_pair(a, b, fe, Ke, f, band, bw):
-    """Add a two-node vector and matrix to ``f`` and ``band`` (LAPACK band storage)."""
-    for i in range(12):
-        gi = NDOF_NODE * (a if i < 6 else b) + i % 6
-        f[gi] += fe[i]
-        for j in range(12):
-            if Ke[i, j] != 0.0:
-                gj = NDOF_NODE * (a if j < 6 else b) + j % 6
-                band[bw + gi - gj, gj] += Ke[i, j]

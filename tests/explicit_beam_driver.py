@@ -1,4 +1,8 @@
-"""Explicit central-difference dynamics (Sec. 4.1, eq. 11) with lumped mass.
+"""A single-system explicit driver for co-rotational beams: the tests' reference for
+the beam element in explicit dynamics (free vibration, wave speed, energy balance).
+
+Not used by a run: the hi-fi models integrate with
+:func:`harnesspipe.fe.solvers.central_difference.integrate`.
 
 The integrator is the central-difference method in its velocity-Verlet form
 (Belytschko, Liu & Moran 2014, sec. 6.2)::
@@ -40,7 +44,7 @@ largest of the section's moments, so J overestimates the bending rotary inertia
 ``rho' (l/2) I`` by 2 for a disc -- a mild rotary-inertia scaling that never lowers
 the stable step).  With an isotropic inertia the Euler equations carry no gyroscopic
 term, ``J dw/dt = m`` holds exactly in the spatial frame, so the moments of
-:func:`harnesspipe.fe.beam.assemble_beams` (conjugate to spatial spins) drive ``w``
+:func:`harnesspipe.fe.elements.beam.assemble_beams` (conjugate to spatial spins) drive ``w``
 directly and the quaternions are updated by the exponential map
 ``q_{n+1} = exp(dt w_{n+1/2}) q_n`` (:func:`harnesspipe.fe.rotation.rotate_nodes`).
 The approximation is the isotropic rotary inertia; it only matters for dynamics
@@ -68,47 +72,9 @@ import numpy as np
 import pandas as pd
 from numba import njit
 
-from harnesspipe.fe.beam import NDOF_NODE, assemble_beams
+from harnesspipe.fe.elements.beam import NDOF_NODE, assemble_beams
 from harnesspipe.fe.rotation import rotate_nodes
-
-
-class ExplicitError(RuntimeError):
-    """The explicit run blew up (energy balance, displacement or non-finite state)."""
-
-    def __init__(self, reason: str, step: int, time: float, ke: float, ie: float, w_ext: float,
-                 dt: float):
-        self.reason, self.step, self.time = reason, step, time
-        self.ke, self.ie, self.w_ext, self.dt = ke, ie, w_ext, dt
-        super().__init__(
-            f"explicit run stopped: {reason} at step {step}, t = {time:.6g} s (dt = {dt:.4g} s); "
-            f"KE = {ke:.6g}, IE = {ie:.6g}, W_ext = {w_ext:.6g}, "
-            f"W_ext - KE - IE = {w_ext - ke - ie:.6g} (N mm: dissipated or held by contacts "
-            f"and ties)")
-
-
-def smooth_step(x: float):
-    """Amplitude S, dS/dx, d2S/dx2 of ``10 x^3 - 15 x^4 + 6 x^5`` (clamped to [0, 1])."""
-    if x <= 0.0:
-        return 0.0, 0.0, 0.0
-    if x >= 1.0:
-        return 1.0, 0.0, 0.0
-    return (x**3 * (10.0 - 15.0 * x + 6.0 * x * x),
-            30.0 * x * x * (1.0 - x) ** 2,
-            60.0 * x * (1.0 - x) * (1.0 - 2.0 * x))
-
-
-def smooth_step_time(r: float) -> float:
-    """The x in [0, 1] at which the smooth step reaches ``S(x) = r`` (bisection: S increases)."""
-    if not 0.0 <= r <= 1.0:
-        raise ValueError(f"smooth step level {r} outside [0, 1]")
-    lo, hi = 0.0, 1.0
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if smooth_step(mid)[0] < r:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
+from harnesspipe.fe.solvers.central_difference import ExplicitError, smooth_step
 
 
 def dilatational_speed(E: float, nu: float, rho: float) -> float:
@@ -122,7 +88,7 @@ def wave_step(min_length: float, E: float, nu: float, rho: float) -> float:
 
 
 # -- kernels -------------------------------------------------------------------
-@njit(cache=True)
+@njit
 def lumped_beam_mass(X, conn, rho, A, Ip, m):
     """Lumped diagonal per dof (6 per node): rho A l/2 on translations, the scalar
     rotary inertia rho I_p l/2 on rotations, from each adjacent element."""
@@ -141,7 +107,7 @@ def lumped_beam_mass(X, conn, rho, A, Ip, m):
                 m[o + 3 + k] += h * Ip
 
 
-@njit(cache=True)
+@njit
 def gershgorin_omega2(band, bw, m, free):
     """Upper bound of the largest eigenvalue of M^-1/2 K M^-1/2 on the free dofs."""
     n = m.shape[0]
@@ -158,7 +124,7 @@ def gershgorin_omega2(band, bw, m, free):
     return best
 
 
-@njit(cache=True)
+@njit
 def kick(v, a, fint, fext, minv, free, hdt):
     """a = M^-1 (f_ext - f_int) and v += hdt a on the free dofs."""
     for i in range(v.shape[0]):
@@ -167,7 +133,7 @@ def kick(v, a, fint, fext, minv, free, hdt):
             v[i] += hdt * a[i]
 
 
-@njit(cache=True)
+@njit
 def half_work(f0, f1, du, idx):
     """sum over idx of 1/2 (f0 + f1) du (all dofs when idx is empty is not used)."""
     s = 0.0

@@ -1,0 +1,112 @@
+"""Sensitivity screen of the hi-fi calibration cases (issue 27 item 3): how much each input
+the chain could fit moves the curve in the window it would be fitted on.
+
+Run with the project's venv: ``.venv/bin/python bench/bench_sensitivity.py [--profile quick]``.
+Replaces the section "## Hi-fi sensitivity screen" of bench/RESULTS.md.
+
+For each calibration case of the chain (Sec. 4.2: the closed and the half-lap CWB for the
+friction and cohesive steps, the t2 fabric CWB for E2/E1) and each input, one virtual test
+with the input moved by STEP (relative; the build state's ``wire_fill`` by an absolute step,
+its default being 0) against the base run at the config's start values and the paper's
+Table 2.  The normalised sensitivity of a window is
+
+    S = (||F' - F|| / ||F||) / (dp / p)     (l2 over the measured grid inside the window)
+
+so S = 1 means a 1 % change of the input moves the window's curve by 1 %; for ``wire_fill``
+the denominator is the absolute step.  Inputs that cannot act on a case (E2/E1 on a tube)
+are not run.  Each run is one Numba thread; two run side by side.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+from multiprocessing import Pool
+
+import numpy as np
+
+from benchlib import write_section
+
+HEADING = "## Hi-fi sensitivity screen"
+STEP = 0.25                    # relative step of an interface input
+ABSOLUTE = {"wire_fill": 0.5}  # inputs whose default is 0: absolute step
+CASES = {                      # calibration case -> (its windows, the inputs that can act on it)
+    "cwb19_t2_closed": (("friction_window", "cohesive_window"),
+                        ("end_tape_layers", "wire_fill", "mu_rtb", "mu_rtp", "delta0", "delta_f",
+                         "alpha_d")),
+    "cwb19_t2_open_halflap": (("friction_window", "cohesive_window"),
+                              ("end_tape_layers", "wire_fill", "mu_rtb", "mu_rtp", "delta0",
+                               "delta_f", "alpha_d")),
+    "cwb19_t2_fabric": (("fabric_window",),
+                        ("end_tape_layers", "wire_fill", "mu_rtb", "mu_rtp", "delta0", "delta_f",
+                         "alpha_d", "E2_over_E1")),
+}
+
+
+def _run(job):
+    """(case, input or None, profile) -> (case, input, deflection, force, summary)."""
+    import os
+    os.environ["NUMBA_NUM_THREADS"] = "1"
+    from harnesspipe.config import load
+    from harnesspipe.models.hifi import three_point
+    from harnesspipe.stages.hifi import inputs, parameters
+    case, name, profile = job
+    cfg = load(overrides={"profile": profile})
+    sets = {}
+    if name is not None:
+        base = parameters(cfg, {})
+        value = {**base["interface"], **base["build"]}[name]
+        sets[name] = str(value + ABSOLUTE[name] if name in ABSOLUTE else value * (1.0 + STEP))
+    run = three_point(inputs(cfg, case, sets), n_shapes=1)
+    c = run.curve
+    return case, name, c["deflection_mm"].to_numpy(), c["force_N"].to_numpy(), run.summary
+
+
+def window_sensitivity(u, F0, F1, window, denominator) -> float:
+    """S of the module docstring over the grid points ``u`` inside ``window``."""
+    sel = (u >= max(window[0], 0.5)) & (u <= window[1])
+    return float(np.linalg.norm(F1[sel] - F0[sel]) / np.linalg.norm(F0[sel]) / denominator)
+
+
+def main() -> None:
+    from harnesspipe.config import load
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--profile", default="quick")
+    args = ap.parse_args()
+    cfg = load(overrides={"profile": args.profile})
+    pipe = cfg["hifi"]["pipeline"]
+    jobs = [(c, None, args.profile) for c in CASES]
+    jobs += [(c, name, args.profile) for c, (_, names) in CASES.items() for name in names]
+    with Pool(2) as pool:
+        results = pool.map(_run, jobs, chunksize=1)
+    curves = {(c, n): (u, F, s) for c, n, u, F, s in results}
+    u = np.linspace(0.0, cfg["three_point"]["deflection"], 301)
+    rows, table = [], {}
+    for case, (windows, names) in CASES.items():
+        u0, F0, _ = curves[(case, None)]
+        F0 = np.interp(u, u0, F0)
+        for name in names:
+            u1, F1, s = curves[(case, name)]
+            F1 = np.interp(u, u1, F1)
+            den = ABSOLUTE.get(name, STEP)
+            S = {w: window_sensitivity(u, F0, F1, pipe[w], den) for w in windows}
+            table[f"{case}/{name}"] = S
+            cells = " | ".join(f"{w.replace('_window', '')} {S[w]:.3f}" for w in windows)
+            rows.append(f"| {case} | {name} | {cells} |")
+            print(rows[-1], flush=True)
+    step = ", ".join(f"{k} +{v}" for k, v in ABSOLUTE.items())
+    text = f"""{HEADING}
+
+`bench/bench_sensitivity.py --profile {args.profile}`: each input the chain could fit moved by
++{100 * STEP:.0f} % ({step}) from the config's start values, the paper's Table 2 coverings; S
+= relative l2 change of the curve in the window / relative change of the input (absolute for
+wire_fill: per unit fill).  S below ~0.05 means the window's curve barely sees the input.
+
+| case | input | S per window |
+|---|---|---|
+""" + "\n".join(rows) + "\n"
+    write_section(HEADING, text)
+    print(json.dumps(table, indent=1))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,160 @@
+"""The named argument groups of the bundle's force kernel (:func:`harnesspipe.fe.assembly.lanes.bundle_forces`).
+
+Each group is a ``NamedTuple`` of arrays and scalars that Numba passes as one typed
+tuple, so that a kernel reads ``beams.conn`` instead of the 40th positional argument:
+two arrays of the same type can no longer be swapped by a reordering.  The groups'
+arrays are the system's own (updated in place: histories, forces); the system makes the
+groups once and again when an array is replaced (after a contact search).
+
+Stacked groups (node-facet sets, tie groups, pin-facet groups) hold their members'
+arrays one after the other (:func:`harnesspipe.fe.assembly.lanes.stack_groups`),
+member ``g`` at rows ``off[g] .. off[g + 1] - 1`` of each array.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+
+class Beams(NamedTuple):
+    """Co-rotational fibre beams (:func:`harnesspipe.fe.elements.beam_explicit.beam_forces`);
+    the beams' material ids are their section ids."""
+    X0: np.ndarray          # (n_nodes, 3) initial positions
+    conn: np.ndarray        # (n_el, 2) node ids
+    R0: np.ndarray          # (n_el, 3, 3) initial element frames
+    xi_g: np.ndarray        # (ng,) Gauss-Lobatto points along the element
+    w_g: np.ndarray         # (ng,) their weights
+    sec_y: np.ndarray       # (n_sec, nf) fibre coordinates in the section
+    sec_z: np.ndarray       # (n_sec, nf)
+    sec_area: np.ndarray    # (n_sec, nf) fibre areas
+    sec_GJ: np.ndarray      # (n_sec,) torsional stiffness
+    sec_id: np.ndarray      # (n_el,) section (and material) of each element
+    mats: np.ndarray        # (n_mat, 4) material rows (E, sigma_y, K, n)
+    eps_p: np.ndarray       # (n_el, ng, nf) fibre plastic strain, in place
+    alpha: np.ndarray       # (n_el, ng, nf) equivalent plastic strain, in place
+    sa_h: np.ndarray        # (n_el, ng, nf) alpha**n, in place
+    f_el: np.ndarray        # (n_el, 12) element forces (scratch)
+
+
+class Shells(NamedTuple):
+    """Belytschko-Lin-Tsay shells (:func:`harnesspipe.fe.elements.shell_bt.shell_forces`)."""
+    conn: np.ndarray        # (n_sh, 4) node ids
+    thick: np.ndarray       # (n_sh,) stiffness thickness
+    mat: np.ndarray         # (n_sh, k) material rows
+    state: np.ndarray       # (n_sh, N_STATE) strains, stresses, plastic state, in place
+    f_el: np.ndarray        # (n_sh, 4, 6) element forces (scratch)
+    hg: float               # hourglass coefficient
+
+
+class WireContact(NamedTuple):
+    """Wire-wire contact (:func:`harnesspipe.fe.contact.wire_wire.beam_beam_contact`)."""
+    seg: np.ndarray         # (n_seg, 2) node ids of the wires' segments
+    seg_r: np.ndarray       # (n_seg,) radii
+    seg_body: np.ndarray    # (n_seg,) wire of each segment
+    pairs: np.ndarray       # (n_pairs, 2) candidate segment pairs
+    k_n: float              # normal penalty
+    k_t: float              # stick penalty
+    mu_s: float             # eq. 6
+    mu_k: float
+    d_c: float
+    hist_partner: np.ndarray   # (n_seg, maxs) slot history, in place
+    hist_ft: np.ndarray        # (n_seg, maxs, WW_POINTS, 3)
+
+
+class FacetSets(NamedTuple):
+    """Node-facet contact sets, stacked
+    (:func:`harnesspipe.fe.contact.node_facet.node_facet_contact`)."""
+    nodes: np.ndarray       # (n,) contact nodes
+    r: np.ndarray           # (n,) their radii
+    quads: np.ndarray       # (n_q, 4) facets
+    t: np.ndarray           # (n_q,) thicknesses
+    sign: np.ndarray        # (n_q,) side of the nodes
+    hist_p: np.ndarray      # (n, maxs) slot history, in place
+    hist_ft: np.ndarray     # (n, maxs, 3)
+    pairs: np.ndarray       # (n_pairs, 2) candidate (node, quad) pairs, each set's own indices
+    off: np.ndarray         # (n_sets + 1, 3) offsets of nodes, quads, pairs
+    prm: np.ndarray         # (n_sets, 5) k, pen_max, mu_s, mu_k, d_c
+
+
+class QuadTies(NamedTuple):
+    """Cohesive ties to shell quads, stacked
+    (:func:`harnesspipe.fe.contact.cohesive_ties.cohesive_ties_quad`)."""
+    tie_node: np.ndarray    # (n,) tied nodes
+    tie_quad: np.ndarray    # (n,) target quad, the group's own index
+    tie_xi: np.ndarray      # (n, 2) target point (xi, eta)
+    tie_sign: np.ndarray    # (n,) side of the node
+    tie_off: np.ndarray     # (n, 3) initial offset in the quad's frame
+    tie_area: np.ndarray    # (n,) tributary areas
+    tie_c: np.ndarray       # (n,) dashpot coefficients
+    quads: np.ndarray       # (n_q, 4) the groups' target quads
+    tie_kappa: np.ndarray   # (n,) damage history, in place
+    tie_D: np.ndarray       # (n,)
+    tie_energy: np.ndarray  # (n,)
+    off: np.ndarray         # (n_groups + 1, 2) offsets of ties, quads
+
+
+class BeamTies(NamedTuple):
+    """Cohesive ties to beam segments, stacked
+    (:func:`harnesspipe.fe.contact.cohesive_ties.cohesive_ties_beam`)."""
+    tie_node: np.ndarray    # (n,) tied nodes
+    tie_seg: np.ndarray     # (n,) target segment
+    tie_s: np.ndarray       # (n,) target point along it
+    tie_anchor: np.ndarray  # (n,) node whose rotation carries the arm
+    tie_arm: np.ndarray     # (n, 3) initial arm from the axis to the node
+    tie_axis: np.ndarray    # (n, 3) initial segment direction
+    tie_area: np.ndarray    # (n,)
+    tie_c: np.ndarray       # (n,)
+    tie_kappa: np.ndarray   # (n,) damage history, in place
+    tie_D: np.ndarray       # (n,)
+    tie_energy: np.ndarray  # (n,)
+    off: np.ndarray         # (n_groups + 1,) offsets of ties
+
+
+class CohesiveLaw(NamedTuple):
+    """The cohesive law of eqs. 7-10 and the order in which the tie groups act."""
+    K: np.ndarray           # (3,) K_nn, K_ss, K_tt
+    delta0: np.ndarray      # (3,) onset separations
+    delta_f: float          # separation at failure
+    alpha_d: float          # mixed-mode exponent
+    order: np.ndarray       # (n_groups, 2) kind (0: quad, 1: beam) and group, in acting order
+
+
+class Cylinders(NamedTuple):
+    """Rigid cylinders (the test's rollers and loading pin); none: zero rows."""
+    centres: np.ndarray     # (n_cyl, 3)
+    axes: np.ndarray        # (n_cyl, 3) unit axes
+    radii: np.ndarray       # (n_cyl,)
+    velocity: np.ndarray    # (n_cyl, 3)
+
+
+class WirePins(NamedTuple):
+    """Wires on the pins as chains (:func:`harnesspipe.fe.contact.wire_pins.chain_cylinder_contact`)."""
+    start: np.ndarray       # (n_wires + 1,) first segment of each wire
+    mu: float
+    k: float
+    hist: np.ndarray        # (n_wires, n_cyl, 3) friction history, in place
+
+
+class PinFacets(NamedTuple):
+    """Shell facet groups on the pins, stacked
+    (:func:`harnesspipe.fe.contact.facet_pins.facets_cylinder_contact`)."""
+    quads: np.ndarray       # (n_q, 4)
+    t: np.ndarray           # (n_q,)
+    slack: np.ndarray       # (n_groups * n_cyl,) initial gaps closed without force
+    hist_q: np.ndarray      # (n_groups * n_cyl, patches) history, in place
+    hist: np.ndarray        # (n_groups * n_cyl, patches, 3)
+    off: np.ndarray         # (n_groups + 1, 2) offsets of quads, per-cylinder rows
+    prm: np.ndarray         # (n_groups, 2) mu, penalty
+
+
+class Forces(NamedTuple):
+    """The force families the kernel ADDS into, all (n_nodes, 6) ON the nodes, and the
+    force on the pins."""
+    f_el: np.ndarray        # element forces (beams and shells)
+    f_n: np.ndarray         # bundle contacts, normal
+    f_t: np.ndarray         # bundle contacts, friction
+    f_c: np.ndarray         # cohesive ties
+    f_pn: np.ndarray        # pins, normal
+    f_pt: np.ndarray        # pins, friction
+    f_cyl: np.ndarray       # (n_cyl, 3) ON the pins

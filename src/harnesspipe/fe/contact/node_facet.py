@@ -1,0 +1,268 @@
+"""Nodes (the wires' nodes as spheres) on bilinear shell quads (tube, tape), Sec. 4.1:
+one-sided penalty contact with the rate-dependent friction of eq. 6.
+
+Each node contacts at most its closest facet of a set; pairs whose node is far from
+the quad's box are rejected before the projection (:func:`_nf_project`).  Conventions:
+:mod:`harnesspipe.fe.contact.common`.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from harnesspipe.fe.contact.common import (CHUNK, REJECT_TOL, SERIAL_MAX_CHUNKS, find_slot,
+                                           to_tangent_plane)
+from harnesspipe.fe.contact.surface import project_quad
+from harnesspipe.fe.materials.friction import rate_dependent_friction
+
+ENTRY_FRACTION = 0.05   # a contact begins at most this far (x (r + t/2)) inside the surface
+
+
+@njit(cache=True, parallel=True)
+def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n, k_t, mu_s,
+                       mu_k, d_c, dt, time_scale, pen_max, hist_partner, hist_ft, f_n, f_t):
+    """One-sided penalty contact of nodes (spheres) with bilinear shell quads, eq. 6 friction.
+
+    Parameters
+    ----------
+    x, v : (n_nodes, 3+) positions, half-step velocities.
+    nodes : (n_cn,) node ids (e.g. the wire nodes); node_r : (n_cn,) their radii.
+    quads : (n_q, 4) node ids; quad_t : (n_q,) thicknesses; quad_sign : (n_q,) +1 / -1:
+        the side where the nodes belong is ``quad_sign * (X_xi x X_eta)`` (e.g. -1 for
+        wires inside a tube whose quad normals point outwards).
+    pairs : (n_pairs, 2) candidate (index into ``nodes``, quad) pairs, e.g. ``box_pairs``
+        of ``node_aabbs`` vs ``quad_aabbs`` with same_set False.
+    k_n, k_t : penalties (N/mm); mu_s, mu_k, d_c : eq. 6 (mu_s = mu_k for constant mu);
+    dt, time_scale : solver step, physical / simulated duration.
+    pen_max : largest penetration accepted (mm); beyond it the node is taken to be on
+        the other side (never grabbed from the wrong side), e.g. ``r + t/2``.
+    hist_partner : (n_cn, MAXS) int64; hist_ft : (n_cn, MAXS, 3), in place
+        (``new_slot_history(n_cn, maxs)``).
+    f_n, f_t : outputs, ADDED.  The node receives F, the quad nodes -F N_i(xi, eta).
+
+    Gap: distance of the node centre to the CLOSEST POINT of the facets' mid-surfaces
+    (Gauss-Newton projection clamped to the quad, so that at edges and corners the closest
+    point lies on the boundary), minus r + t/2.  Each node contacts at most its closest
+    facet of the set: the distance to a polyhedral surface is continuous and its gradient is
+    the unit vector to the closest point, so the penalty energy 1/2 k gap^2 is a potential
+    -- the contact is conservative also where a node slides over a convex kink (under the
+    loading pin the tube folds towards the wires), where a projection-along-normal rule
+    has a dead zone of width ~ 2 (r + t/2) tan(kink/2) through which nodes sink and then
+    get pushed out with energy that was never stored.  The force direction is the unit
+    vector from the closest point to the node (the facet normal inside a facet); a node
+    already behind the mid-surface (side test ``quad_sign * n . d < 0``) over the facet's
+    interior is pushed along the facet normal, up to the penetration ``pen_max``, provided it
+    was in contact with the set at the previous step (``hist_partner[i, 0] >= 0``: it went in
+    from the front); behind the plane but beside the facet (closest point on its boundary: a
+    wire beyond the tube's end, an open cut's edge) is no contact.  More generally a node that
+    was not in contact at the previous step begins a contact only at the surface: with a
+    penetration up to ``ENTRY_FRACTION (r + t/2)`` (a step's approach is far less); deeper,
+    it is on the other side.  Otherwise a node that passed behind the mid-surface beyond
+    ``pen_max`` (or around a free edge) met its whole penetration at once on its way back --
+    measured as 9 N mm made in one step by the fabric's overlap self-contact.  Without the history rule a
+    node beside a FREE edge of the set and behind its plane (the next fabric layer of a spiral
+    where the set's quads stop) met its whole penetration at once when it slid over the facet,
+    and was pushed out with energy never stored.  Limitation: one contact per node and
+    set, so a node pinched between two opposite walls of the same set (a tube flattened
+    below one wire diameter) only sees the nearer one.
+    Returns the number of active contacts.
+    """
+    n_pairs = pairs.shape[0]
+    dt_phys = dt * time_scale
+    t_max = 0.0
+    for q in range(quad_t.shape[0]):
+        t_max = max(t_max, quad_t[q])
+    pd = np.empty((n_pairs, 9))     # xi, eta, dist(signed), n(3) force direction, X(3)
+    n_chunks = (n_pairs + CHUNK - 1) // CHUNK
+    if n_chunks <= SERIAL_MAX_CHUNKS:
+        _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, 0, n_pairs, pd)
+    else:
+        for ch in prange(n_chunks):
+            _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, ch * CHUNK,
+                        min(n_pairs, (ch + 1) * CHUNK), pd)
+    return _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu_k, d_c,
+                      dt, dt_phys, pen_max, hist_partner, hist_ft, f_n, f_t)
+
+
+@njit(cache=True)
+def node_facet_contact_serial(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n, k_t,
+                              mu_s, mu_k, d_c, dt, time_scale, pen_max, hist_partner, hist_ft,
+                              f_n, f_t):
+    """Serial twin of :func:`node_facet_contact` (for a caller that runs it beside other
+    work); the same steps, the same arithmetic, the same results."""
+    n_pairs = pairs.shape[0]
+    t_max = 0.0
+    for q in range(quad_t.shape[0]):
+        t_max = max(t_max, quad_t[q])
+    pd = np.empty((n_pairs, 9))
+    _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, 0, n_pairs, pd)
+    return _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu_k, d_c,
+                      dt, dt * time_scale, pen_max, hist_partner, hist_ft, f_n, f_t)
+
+
+@njit(cache=True)
+def _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu_k, d_c, dt,
+               dt_phys, pen_max, hist_partner, hist_ft, f_n, f_t):
+    """The serial end of the node-facet contact, from the projections ``pd`` of the pairs
+    (:func:`_nf_project`): each node's closest facet, its force, friction and history."""
+    n_pairs = pairs.shape[0]
+    n_cn = nodes.shape[0]
+    # closest facet per node (pairs are grouped by node); behind a facet only a node that was
+    # in contact at the previous step (it went in from the front)
+    best = np.full(n_cn, -1, dtype=np.int64)
+    for p in range(n_pairs):
+        i = pairs[p, 0]
+        if not np.isfinite(pd[p, 2]) or (pd[p, 2] < 0.0 and hist_partner[i, 0] < 0):
+            continue
+        b = best[i]
+        if b < 0 or abs(pd[p, 2]) < abs(pd[b, 2]):
+            best[i] = p
+    # node by node: each row of the history is read (old slot) before it is rewritten, so
+    # the history is updated in place (no copies)
+    maxs = hist_partner.shape[1]
+    fold = np.empty(3)
+    dg = np.empty(3)
+    ds = np.empty(3)
+    hnew = np.empty(3)
+    nv = np.empty(3)
+    N = np.empty(4)
+    n_active = 0
+    for i in range(n_cn):
+        p = best[i]
+        q = pairs[p, 1] if p >= 0 else -1
+        gap = pd[p, 2] - node_r[i] - 0.5 * quad_t[q] if p >= 0 else 0.0
+        entering = hist_partner[i, 0] < 0
+        if (p < 0 or gap >= 0.0 or -gap > pen_max
+                or (entering and -gap > ENTRY_FRACTION * (node_r[i] + 0.5 * quad_t[q]))):
+            for s in range(maxs):
+                hist_partner[i, s] = -1
+            continue
+        nd = nodes[i]
+        n_active += 1
+        xi = pd[p, 0]
+        eta = pd[p, 1]
+        N[0] = 0.25 * (1 - xi) * (1 - eta)
+        N[1] = 0.25 * (1 + xi) * (1 - eta)
+        N[2] = 0.25 * (1 + xi) * (1 + eta)
+        N[3] = 0.25 * (1 - xi) * (1 + eta)
+        pn = -k_n * gap
+        for c in range(3):
+            nv[c] = pd[p, 3 + c]
+            hnew[c] = 0.0
+        if k_t > 0.0:
+            slot = find_slot(hist_partner, quads, i, q)
+            for c in range(3):
+                fold[c] = hist_ft[i, slot, c] if slot >= 0 else 0.0
+                vq = 0.0
+                for m in range(4):
+                    vq += N[m] * v[quads[q, m], c]
+                dg[c] = dt * (v[nd, c] - vq)
+            to_tangent_plane(fold, dg, nv)
+            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew, ds)
+        for s in range(maxs):
+            hist_partner[i, s] = -1
+        hist_partner[i, 0] = q              # in contact (also read by the behind-facet rule)
+        if k_t > 0.0:
+            for c in range(3):
+                hist_ft[i, 0, c] = hnew[c]
+        for c in range(3):
+            fnc = pn * nv[c]
+            ftc = -hnew[c]
+            f_n[nd, c] += fnc
+            f_t[nd, c] += ftc
+            for m in range(4):
+                f_n[quads[q, m], c] -= N[m] * fnc
+                f_t[quads[q, m], c] -= N[m] * ftc
+    return n_active
+
+
+@njit(cache=True, inline="always")
+def _nf_reach(r, t_max, pen_max):
+    """Largest |distance| of a node (radius r) from a facet it can be in contact with (see
+    :func:`_nf_project`), with the slack of the early rejects."""
+    return max(r + 0.5 * t_max, pen_max - r) * (1.0 + REJECT_TOL)
+
+
+@njit(cache=True)
+def _node_quad_box_d2(x, nd, quads, q):
+    """Squared distance of node ``nd`` from the bounding box of quad ``q``'s nodes."""
+    d2 = 0.0
+    for c in range(3):
+        lo = min(min(x[quads[q, 0], c], x[quads[q, 1], c]),
+                 min(x[quads[q, 2], c], x[quads[q, 3], c]))
+        hi = max(max(x[quads[q, 0], c], x[quads[q, 1], c]),
+                 max(x[quads[q, 2], c], x[quads[q, 3], c]))
+        d = max(lo - x[nd, c], x[nd, c] - hi)
+        if d > 0.0:
+            d2 += d * d
+    return d2
+
+
+@njit(cache=True)
+def near_node_facet_pairs(x, nodes, node_r, quads, quad_t, pairs, pen_max, margin):
+    """Mask of the candidate (node, quad) pairs of :func:`node_facet_contact` that can
+    come into contact before the next search: node within ``_nf_reach + margin`` of the
+    quad's node box.  Until the next search every node stays within ``margin / 2`` of
+    where it is now (the search rule), so the box distance shrinks by less than
+    ``margin``; a pair dropped here would be rejected early by :func:`_nf_project` at
+    every step until then (same result).  The mask keeps the order of ``pairs``."""
+    t_max = 0.0
+    for q in range(quad_t.shape[0]):
+        t_max = max(t_max, quad_t[q])
+    keep = np.empty(pairs.shape[0], dtype=np.bool_)
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        lim = _nf_reach(node_r[i], t_max, pen_max) + margin
+        keep[p] = _node_quad_box_d2(x, nodes[i], quads, pairs[p, 1]) <= lim * lim
+    return keep
+
+
+@njit(cache=True)
+def _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, p0, p1, pd):
+    """Closest points of the (node, quad) pairs p0..p1-1 into pd (see node_facet_contact).
+
+    Early reject: a pair whose node is farther from the bounding box of the quad's nodes
+    (which holds the bilinear facet, so the box distance bounds |dist| from below) than
+    ``T = max(r + t_max/2, pen_max - r)`` gets pd = inf.  Any contact has
+    |dist| <= T (in front: |dist| < r + t/2; behind: |dist| + r + t/2 <= pen_max), so
+    if a node's closest facet is in contact it is not rejected and every rejected pair is
+    farther (the choice of the closest facet is unchanged), and if it is rejected no pair
+    of the node can be in contact: the result is unchanged.
+    """
+    prj = np.zeros(8)
+    for p in range(p0, p1):
+        i = pairs[p, 0]
+        q = pairs[p, 1]
+        nd = nodes[i]
+        pd[p, 2] = np.inf
+        if (quads[q, 0] == nd or quads[q, 1] == nd or quads[q, 2] == nd
+                or quads[q, 3] == nd):
+            continue
+        lim = _nf_reach(node_r[i], t_max, pen_max)
+        if _node_quad_box_d2(x, nd, quads, q) > lim * lim:
+            continue
+        project_quad(x, quads, q, x[nd], True, prj)
+        d0 = x[nd, 0] - prj[2]
+        d1 = x[nd, 1] - prj[3]
+        d2 = x[nd, 2] - prj[4]
+        dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        sg = quad_sign[q]
+        side = sg * (d0 * prj[5] + d1 * prj[6] + d2 * prj[7])
+        pd[p, 0] = prj[0]
+        pd[p, 1] = prj[1]
+        pd[p, 6] = prj[2]
+        pd[p, 7] = prj[3]
+        pd[p, 8] = prj[4]
+        if side >= 0.0 and dist > 1e-12:
+            pd[p, 2] = dist
+            pd[p, 3] = d0 / dist
+            pd[p, 4] = d1 / dist
+            pd[p, 5] = d2 / dist
+        elif abs(prj[0]) < 1.0 - 1e-9 and abs(prj[1]) < 1.0 - 1e-9:
+            # behind the mid-surface, over the facet's interior: push out along the normal
+            pd[p, 2] = -dist
+            pd[p, 3] = sg * prj[5]
+            pd[p, 4] = sg * prj[6]
+            pd[p, 5] = sg * prj[7]

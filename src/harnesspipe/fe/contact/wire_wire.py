@@ -1,0 +1,452 @@
+"""Wire-wire contact of the explicit bundle model (Sec. 4.1): penalty normal force and the
+rate-dependent friction of eq. 6 between the 2-node beam segments of different wires.
+
+A pair first has its touching contact points flagged (an early bounding-box and distance
+reject of far candidates, :func:`_ww_flags`), then forces and friction are computed for
+those only (:func:`_ww_forces`) and committed serially (:func:`_ww_commit`).  Contact
+points (:func:`_segment_points`): the crossing rule (closest points) for crossing
+segments, the parallel rule (the two ends of the common part) for nearly parallel ones,
+blended in between.  Conventions: :mod:`harnesspipe.fe.contact.common`.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from harnesspipe.fe.contact.common import (CHUNK, REJECT_TOL, SERIAL_MAX_CHUNKS, find_slot,
+                                           free_slot, to_tangent_plane)
+from harnesspipe.fe.contact.search import segment_closest_params
+from harnesspipe.fe.materials.friction import rate_dependent_friction
+from harnesspipe.fe.vec3 import any_perpendicular
+
+PARALLEL_COS = (0.98, 0.995)   # |cos| of two segments: crossing rule below, parallel rule above,
+                               # both blended in between (see _segment_points)
+WW_POINTS = 3           # contact points per pair: crossing point, two parallel ends
+
+
+@njit(cache=True)
+def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out, blend):
+    """Contact points of segments a, b (up to ``WW_POINTS``); returns the bit mask of the
+    points present (0: none).  ``w_out`` are the weights of each rule alone; the blend
+    factor beta and its derivative d beta / d|cos| go to ``blend``.
+
+    Point 0, crossing rule: the closest points of the two segments (clamped), weight 1,
+    halved at an end node shared with another segment (that segment finds the same point).
+    Points 1, 2, parallel rule: the two ends of the common part of the segments projected
+    on a's axis, each paired with its closest point on b, weight  L_overlap / (L_a + L_b)
+    each (the pair carries  k_n * mean penetration * L_overlap / L_mean; for equal aligned
+    chains every node-to-node line carries k_n * penetration).
+    The crossing rule holds for |cos| <= PARALLEL_COS[0], the parallel rule for |cos| >=
+    PARALLEL_COS[1]; in between the pair's energy is ``(1 - beta) U_cross + beta U_par``
+    with beta a smooth step in |cos|.  A sharp switch would make the energy jump whenever
+    a penetrating pair turns through the threshold (the closest point of the crossing rule
+    and the ends of the parallel rule see different penetrations): measured as wire-wire
+    contact creating energy in kicks in bent twisted-wire bundles.
+    """
+    a0 = seg[a, 0]
+    a1 = seg[a, 1]
+    b0 = seg[b, 0]
+    b1 = seg[b, 1]
+    da0 = x[a1, 0] - x[a0, 0]
+    da1 = x[a1, 1] - x[a0, 1]
+    da2 = x[a1, 2] - x[a0, 2]
+    db0 = x[b1, 0] - x[b0, 0]
+    db1 = x[b1, 1] - x[b0, 1]
+    db2 = x[b1, 2] - x[b0, 2]
+    r0 = x[a0, 0] - x[b0, 0]
+    r1 = x[a0, 1] - x[b0, 1]
+    r2 = x[a0, 2] - x[b0, 2]
+    A = da0 * da0 + da1 * da1 + da2 * da2
+    E = db0 * db0 + db1 * db1 + db2 * db2
+    B = da0 * db0 + da1 * db1 + da2 * db2
+    C = da0 * r0 + da1 * r1 + da2 * r2
+    F = db0 * r0 + db1 * r1 + db2 * r2
+    La = math.sqrt(A)
+    Lb = math.sqrt(E)
+    cosab = abs(B) / (La * Lb)
+    c0, c1 = PARALLEL_COS
+    if cosab <= c0:
+        blend[0] = 0.0
+        blend[1] = 0.0
+    elif cosab >= c1:
+        blend[0] = 1.0
+        blend[1] = 0.0
+    else:
+        t = (cosab - c0) / (c1 - c0)
+        blend[0] = t * t * (3.0 - 2.0 * t)
+        blend[1] = 6.0 * t * (1.0 - t) / (c1 - c0)
+    mask = 0
+    if blend[0] < 1.0:                    # not parallel: A E - B^2 > 0
+        s, u = segment_closest_params(A, B, C, E, F)
+        w = 1.0
+        if (s == 0.0 and valence[a0] > 1) or (s == 1.0 and valence[a1] > 1):
+            w *= 0.5
+        if (u == 0.0 and valence[b0] > 1) or (u == 1.0 and valence[b1] > 1):
+            w *= 0.5
+        s_out[0] = s
+        u_out[0] = u
+        w_out[0] = w
+        mask = 1
+    if blend[0] > 0.0:
+        # parallel: common part on a's axis
+        sb0 = -C / A                      # b0 on a: (b0 - a0).da / A
+        sb1 = (B - C) / A                 # b1 on a
+        lo = max(0.0, min(sb0, sb1))
+        hi = min(1.0, max(sb0, sb1))
+        w = (hi - lo) * La / (La + Lb) if hi >= lo else 0.0
+        if w > 0.0:
+            for k in range(1, 3):
+                s = lo if k == 1 else hi
+                u = (F + s * B) / E           # point of a at s, projected on b
+                s_out[k] = s
+                u_out[k] = min(1.0, max(0.0, u))
+                w_out[k] = w
+            mask |= 6
+    return mask
+
+
+@njit(cache=True)
+def _blend_forces(x, a0, a1, b0, b1, dUdcos, f_n):
+    """Forces ``-dU/dcos * d|cos|/dx`` of the blend (``dUdcos = (U_par - U_cross) beta'``):
+    the part of the pair's energy gradient that comes from beta turning with the segments."""
+    A = E = B = 0.0
+    for c in range(3):
+        da = x[a1, c] - x[a0, c]
+        db = x[b1, c] - x[b0, c]
+        A += da * da
+        E += db * db
+        B += da * db
+    LL = math.sqrt(A * E)
+    cs = abs(B) / LL
+    sg = 1.0 if B >= 0.0 else -1.0
+    for c in range(3):
+        da = x[a1, c] - x[a0, c]
+        db = x[b1, c] - x[b0, c]
+        ga = sg * db / LL - cs * da / A          # d|cos| / d(da)
+        gb = sg * da / LL - cs * db / E          # d|cos| / d(db)
+        f_n[a1, c] -= dUdcos * ga
+        f_n[a0, c] += dUdcos * ga
+        f_n[b1, c] -= dUdcos * gb
+        f_n[b0, c] += dUdcos * gb
+
+
+@njit(cache=True, parallel=True)
+def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d_c, dt,
+                      time_scale, hist_partner, hist_ft, f_n, f_t):
+    """Wire-wire penalty contact with eq. 6 friction between 2-node beam segments.
+
+    Parameters
+    ----------
+    x, v : (n_nodes, 3+) positions, half-step velocities.
+    seg : (n_seg, 2) node ids of the segments; seg_r : (n_seg,) radii (mm);
+    seg_body : (n_seg,) wire id (segments of one wire never contact each other).
+    pairs : (n_pairs, 2) candidate segment pairs (e.g. ``box_pairs(.., same_set=True)``
+        on ``segment_aabbs``); the owner of a pair's history is ``min(a, b)``.
+    k_n : normal penalty (N/mm per unit weight of a contact point);
+    k_t : tangential (stick) penalty (N/mm), 0 disables friction.
+    mu_s, mu_k, d_c : eq. 6 (d_c in s of PHYSICAL time).
+    dt : solver step; time_scale : physical / simulated duration (dt_phys = dt time_scale).
+    hist_partner : (n_seg, MAXS) int64; hist_ft : (n_seg, MAXS, WW_POINTS, 3) friction
+        history per (owner, partner slot, contact point), in place (``new_slot_history(n_seg,
+        maxs, points=WW_POINTS)``).
+    f_n, f_t : (n_nodes, 3+) outputs, normal and friction forces ADDED.
+
+    Geometry: gap ``|p_a - p_b| - r_a - r_b`` at the contact points of
+    :func:`_segment_points` (closest points for crossing segments; for nearly parallel
+    segments the two ends of their common part, node-to-segment like, which is well posed
+    and continuous under tangential motion; blended in between, with the blend's own
+    energy gradient).  Point forces go to the end nodes by the linear shape functions
+    ``(1 - s, s)``.
+
+    Returns the number of pairs with at least one active contact point.
+    """
+    n_pairs = pairs.shape[0]
+    valence = _valence(seg, x.shape[0])
+    # phase 1: which pairs touch, and at which of their points (kept for phase 2)
+    flag = np.empty(n_pairs, dtype=np.int8)
+    pts = np.empty((n_pairs, 4, WW_POINTS))   # s, u, weight per point; beta, beta' (row 3)
+    n_chunks = (n_pairs + CHUNK - 1) // CHUNK
+    if n_chunks <= SERIAL_MAX_CHUNKS:
+        _ww_flags(x, seg, seg_r, seg_body, pairs, valence, 0, n_pairs, flag, pts)
+    else:
+        for ch in prange(n_chunks):
+            _ww_flags(x, seg, seg_r, seg_body, pairs, valence, ch * CHUNK,
+                      min(n_pairs, (ch + 1) * CHUNK), flag, pts)
+    idx = _touching(flag)
+    n_act = idx.size
+    # phase 2: forces and friction of the touching pairs only
+    pfn = np.empty((n_act, WW_POINTS, 3))     # weighted normal force on a's point
+    pft = np.empty((n_act, WW_POINTS, 3))     # weighted friction force on a's point
+    hnew = np.empty((n_act, WW_POINTS, 3))    # new friction history (per unit weight)
+    pdu = np.empty(n_act)                     # (U_par - U_cross) beta' of the blend
+    dt_phys = dt * time_scale
+    n_chunks = (n_act + CHUNK - 1) // CHUNK
+    if n_chunks <= SERIAL_MAX_CHUNKS:
+        _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c, dt,
+                   dt_phys, hist_partner, hist_ft, 0, n_act, pfn, pft, hnew, pdu)
+    else:
+        for ch in prange(n_chunks):
+            _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c,
+                       dt, dt_phys, hist_partner, hist_ft, ch * CHUNK,
+                       min(n_act, (ch + 1) * CHUNK), pfn, pft, hnew, pdu)
+    _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner, hist_ft,
+               f_n, f_t)
+    return n_act
+
+
+@njit(cache=True)
+def beam_beam_contact_serial(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d_c,
+                             dt, time_scale, hist_partner, hist_ft, f_n, f_t):
+    """Serial twin of :func:`beam_beam_contact` (for a caller that runs it beside other
+    work); the same phases, the same arithmetic, the same results."""
+    n_pairs = pairs.shape[0]
+    valence = _valence(seg, x.shape[0])
+    flag = np.empty(n_pairs, dtype=np.int8)
+    pts = np.empty((n_pairs, 4, WW_POINTS))
+    _ww_flags(x, seg, seg_r, seg_body, pairs, valence, 0, n_pairs, flag, pts)
+    idx = _touching(flag)
+    n_act = idx.size
+    pfn = np.empty((n_act, WW_POINTS, 3))
+    pft = np.empty((n_act, WW_POINTS, 3))
+    hnew = np.empty((n_act, WW_POINTS, 3))
+    pdu = np.empty(n_act)
+    _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c, dt,
+               dt * time_scale, hist_partner, hist_ft, 0, n_act, pfn, pft, hnew, pdu)
+    _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner, hist_ft,
+               f_n, f_t)
+    return n_act
+
+
+@njit(cache=True)
+def _valence(seg, n_nodes):
+    """Number of segments at each node."""
+    valence = np.zeros(n_nodes, dtype=np.int64)
+    for e in range(seg.shape[0]):
+        valence[seg[e, 0]] += 1
+        valence[seg[e, 1]] += 1
+    return valence
+
+
+@njit(cache=True)
+def _touching(flag):
+    """Indices of the nonzero flags, in order."""
+    n_act = 0
+    for p in range(flag.size):
+        if flag[p] != 0:
+            n_act += 1
+    idx = np.empty(n_act, dtype=np.int64)
+    j = 0
+    for p in range(flag.size):
+        if flag[p] != 0:
+            idx[j] = p
+            j += 1
+    return idx
+
+
+@njit(cache=True)
+def _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner, hist_ft,
+               f_n, f_t):
+    """The serial end of the wire-wire contact: the new friction history of the touching
+    pairs replaces the old one, and their point forces go to the segments' end nodes
+    (in pair order)."""
+    for i in range(hist_partner.shape[0]):
+        for s in range(hist_partner.shape[1]):
+            hist_partner[i, s] = -1
+    for j in range(idx.size):
+        p = idx[j]
+        a = pairs[p, 0]
+        b = pairs[p, 1]
+        if a > b:
+            a, b = b, a
+        slot = free_slot(hist_partner, a)
+        if slot >= 0:
+            hist_partner[a, slot] = b
+            for k in range(WW_POINTS):
+                for c in range(3):
+                    hist_ft[a, slot, k, c] = hnew[j, k, c]
+        a0 = seg[a, 0]
+        a1 = seg[a, 1]
+        b0 = seg[b, 0]
+        b1 = seg[b, 1]
+        if pdu[j] != 0.0:
+            _blend_forces(x, a0, a1, b0, b1, pdu[j], f_n)
+        for k in range(WW_POINTS):
+            if not (flag[p] >> k) & 1:
+                continue
+            s = pts[p, 0, k]
+            u = pts[p, 1, k]
+            for c in range(3):
+                fn = pfn[j, k, c]
+                ft = pft[j, k, c]
+                f_n[a0, c] += (1 - s) * fn
+                f_n[a1, c] += s * fn
+                f_n[b0, c] -= (1 - u) * fn
+                f_n[b1, c] -= u * fn
+                f_t[a0, c] += (1 - s) * ft
+                f_t[a1, c] += s * ft
+                f_t[b0, c] -= (1 - u) * ft
+                f_t[b1, c] -= u * ft
+
+
+@njit(cache=True)
+def _boxes_apart(x, a0, a1, b0, b1, r):
+    """True if the bounding boxes of segments (a0, a1) and (b0, b1) are farther apart than
+    ``r``: then every point pair of the segments is, and no contact point can touch."""
+    d2 = 0.0
+    for c in range(3):
+        lo_a = min(x[a0, c], x[a1, c])
+        hi_a = max(x[a0, c], x[a1, c])
+        lo_b = min(x[b0, c], x[b1, c])
+        hi_b = max(x[b0, c], x[b1, c])
+        d = max(lo_b - hi_a, lo_a - hi_b)
+        if d > 0.0:
+            d2 += d * d
+    return d2 > (r * (1.0 + REJECT_TOL)) ** 2
+
+
+@njit(cache=True)
+def _segments_apart(x, a0, a1, b0, b1, r):
+    """True if the segments (a0, a1) and (b0, b1) are farther apart than ``r`` (their
+    closest points, :func:`segment_closest_params`): every contact point of
+    :func:`_segment_points` lies on both segments, so none can touch."""
+    A = B = C = E = F = 0.0
+    for c in range(3):
+        da = x[a1, c] - x[a0, c]
+        db = x[b1, c] - x[b0, c]
+        rc = x[a0, c] - x[b0, c]
+        A += da * da
+        B += da * db
+        C += da * rc
+        E += db * db
+        F += db * rc
+    s, u = segment_closest_params(A, B, C, E, F)
+    d2 = 0.0
+    for c in range(3):
+        d = ((1 - s) * x[a0, c] + s * x[a1, c]) - ((1 - u) * x[b0, c] + u * x[b1, c])
+        d2 += d * d
+    return d2 > (r * (1.0 + REJECT_TOL)) ** 2
+
+
+@njit(cache=True)
+def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag, pts):
+    """flag[p] for pairs p0..p1-1: bit k set if contact point k of the pair penetrates;
+    for a pair with a flag, its points (:func:`_segment_points`) into ``pts[p]``: rows s,
+    u, weight, and (beta, beta', rule mask) in row 3."""
+    for p in range(p0, p1):
+        flag[p] = 0
+        a = pairs[p, 0]
+        b = pairs[p, 1]
+        if a > b:
+            a, b = b, a
+        if a == b or seg_body[a] == seg_body[b]:
+            continue
+        a0 = seg[a, 0]
+        a1 = seg[a, 1]
+        b0 = seg[b, 0]
+        b1 = seg[b, 1]
+        rr = seg_r[a] + seg_r[b]
+        if _boxes_apart(x, a0, a1, b0, b1, rr) or _segments_apart(x, a0, a1, b0, b1, rr):
+            continue                                # early rejects (most candidates)
+        m = _segment_points(x, seg, a, b, valence, pts[p, 0], pts[p, 1], pts[p, 2], pts[p, 3])
+        pts[p, 3, 2] = m
+        f = 0
+        for k in range(WW_POINTS):
+            if not (m >> k) & 1:
+                continue
+            s = pts[p, 0, k]
+            u = pts[p, 1, k]
+            dist2 = 0.0
+            for c in range(3):
+                d = ((1 - s) * x[a0, c] + s * x[a1, c]) - ((1 - u) * x[b0, c] + u * x[b1, c])
+                dist2 += d * d
+            if not (math.sqrt(dist2) - rr >= 0.0):
+                f |= 1 << k
+        flag[p] = f
+
+
+@njit(cache=True)
+def _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c, dt,
+               dt_phys, hist_partner, hist_ft, j0, j1, pfn, pft, hnew, pdu):
+    """Normal and friction forces of the touching pairs idx[j0:j1] (compact arrays by j) at
+    their points ``pts`` (:func:`_ww_flags`); ``pdu[j]``: (U_par - U_cross) beta' for
+    :func:`_blend_forces`."""
+    scr = np.zeros((4, 3))
+    for j in range(j0, j1):
+        p = idx[j]
+        for k in range(WW_POINTS):
+            for c in range(3):
+                pfn[j, k, c] = 0.0
+                pft[j, k, c] = 0.0
+                hnew[j, k, c] = 0.0
+        a = pairs[p, 0]
+        b = pairs[p, 1]
+        if a > b:
+            a, b = b, a
+        wv = pts[p, 2]
+        bl = pts[p, 3]
+        m = int(bl[2])
+        beta = bl[0]
+        u_cross = 0.0
+        u_par = 0.0
+        slot = -2                        # looked up at the first active point
+        a0 = seg[a, 0]
+        a1 = seg[a, 1]
+        b0 = seg[b, 0]
+        b1 = seg[b, 1]
+        rr = seg_r[a] + seg_r[b]
+        fold = scr[0]
+        dg = scr[1]
+        ds = scr[2]
+        nv = scr[3]
+        for k in range(WW_POINTS):
+            if not (flag[p] >> k) & 1:
+                continue
+            s = pts[p, 0, k]
+            u = pts[p, 1, k]
+            dist2 = 0.0
+            for c in range(3):
+                pa = (1 - s) * x[a0, c] + s * x[a1, c]
+                pb = (1 - u) * x[b0, c] + u * x[b1, c]
+                nv[c] = pa - pb
+                dist2 += nv[c] * nv[c]
+            dist = math.sqrt(dist2)
+            gap = dist - rr
+            if dist > 1e-12 * rr:
+                for c in range(3):
+                    nv[c] /= dist
+            else:
+                for c in range(3):
+                    dg[c] = x[a1, c] - x[a0, c]
+                any_perpendicular(dg, nv)
+            pn = -k_n * gap
+            if k == 0:
+                u_cross += 0.5 * wv[k] * pn * (-gap)
+                w = (1.0 - beta) * wv[k]
+            else:
+                u_par += 0.5 * wv[k] * pn * (-gap)
+                w = beta * wv[k]
+            for c in range(3):
+                pfn[j, k, c] = w * pn * nv[c]
+            if k_t <= 0.0:
+                continue
+            if slot == -2:
+                slot = find_slot(hist_partner, seg, a, b)
+            for c in range(3):
+                fold[c] = hist_ft[a, slot, k, c] if slot >= 0 else 0.0
+                dg[c] = dt * ((1 - s) * v[a0, c] + s * v[a1, c]
+                              - (1 - u) * v[b0, c] - u * v[b1, c])
+            to_tangent_plane(fold, dg, nv)
+            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew[j, k], ds)
+            for c in range(3):
+                pft[j, k, c] = -w * hnew[j, k, c]
+        pdu[j] = (u_par - u_cross) * bl[1]
+        # a rule not in use hands its points the other's stick force (no loss at a switch)
+        if m == 1:
+            for c in range(3):
+                hnew[j, 1, c] = hnew[j, 0, c]
+                hnew[j, 2, c] = hnew[j, 0, c]
+        elif m == 6:
+            for c in range(3):
+                hnew[j, 0, c] = 0.5 * (hnew[j, 1, c] + hnew[j, 2, c])

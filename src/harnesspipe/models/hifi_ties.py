@@ -1,0 +1,145 @@
+"""Cohesive ties of the hi-fi bundle (Sec. 4.1, eqs. 7-10): the tape's nodes bonded to the
+tube, to the tape underneath and to the wires, with a dashpot beside each tie; their
+stiffness enters the stable step and the selective mass scaling.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from harnesspipe.fe.assembly.groups import BeamTies, QuadTies
+from harnesspipe.fe.assembly.lanes import stack_groups
+from harnesspipe.fe.contact.tie_targets import make_ties
+from harnesspipe.models import hifi_mesh as hm
+
+TIE_TOL = {hm.TIE_COVERING: 0.3, hm.TIE_WIRES: 0.5, hm.TIE_TAPE: 0.3}   # mm: facet chord sag / hexagonal bundle under a round band
+I8, F8 = np.int64, float
+QUAD_TIE_SPEC = {"tie_node": ((), I8), "tie_quad": ((), I8), "tie_xi": ((2,), F8),
+                 "tie_sign": ((), F8), "tie_off": ((3,), F8), "tie_area": ((), F8),
+                 "tie_c": ((), F8), "quads": ((4,), I8), "tie_kappa": ((), F8), "tie_D": ((), F8),
+                 "tie_energy": ((), F8)}                       # stacked ties to quads
+BEAM_TIE_SPEC = {"tie_node": ((), I8), "tie_seg": ((), I8), "tie_s": ((), F8),
+                 "tie_anchor": ((), I8), "tie_arm": ((3,), F8), "tie_axis": ((3,), F8),
+                 "tie_area": ((), F8), "tie_c": ((), F8), "tie_kappa": ((), F8),
+                 "tie_D": ((), F8), "tie_energy": ((), F8)}    # stacked ties to beams
+TIE_HISTORY = ("tie_kappa", "tie_D", "tie_energy")
+
+
+class BundleTies:
+    """The cohesive ties of a :class:`~harnesspipe.models.hifi_bundle.BundleSystem`: made from
+    the mesh's tie nodes and targets, their dashpots, their share of the stable step, and
+    their groups stacked for :func:`harnesspipe.fe.assembly.lanes.bundle_forces`."""
+
+    def _setup_ties(self):
+        mesh, itf = self.mesh, self.inp.interface
+        self.ties = []
+        self.K_coh = np.array([itf["K_nn"], itf["K_ss"], itf["K_tt"]], dtype=float)
+        self.delta0 = np.full(3, float(itf["delta0"]))
+        if not self.has_shells or mesh.tie_nodes.size == 0:
+            return
+        tape = self.sconn[mesh.shell_part == hm.PART_TAPE]
+        tape_t = 0.5 * self.inp.config["materials"]["pvc_tape"]["thickness"]
+        for target in (hm.TIE_COVERING, hm.TIE_WIRES, hm.TIE_TAPE):
+            sel = mesh.tie_target == target
+            if not sel.any():
+                continue
+            nodes, area = mesh.tie_nodes[sel], mesh.tie_area[sel]
+            if target == hm.TIE_WIRES:
+                _, ties = make_ties(self.x, nodes, area, seg=self.seg, seg_r=self.seg_r,
+                                       tape_half_t=tape_t, tol=TIE_TOL[target])
+                ends = self.seg[ties["tie_seg"]]
+                s_ = ties["tie_s"]
+                P = (1.0 - s_)[:, None] * self.x[ends[:, 0]] + s_[:, None] * self.x[ends[:, 1]]
+                ties["tie_anchor"] = np.where(s_ < 0.5, ends[:, 0], ends[:, 1]).astype(np.int64)
+                ties["tie_arm"] = np.ascontiguousarray(self.x[ties["tie_node"]] - P)
+                ties["tie_axis"] = np.ascontiguousarray(ties["tie_t0"])
+                kind = "beam"
+            else:
+                quads = (self.sconn[mesh.shell_part != hm.PART_TAPE] if target == hm.TIE_COVERING
+                         else tape)
+                t = np.full(quads.shape[0], 2 * tape_t)
+                if target == hm.TIE_COVERING:
+                    t = mesh.shell_thickness[mesh.shell_part != hm.PART_TAPE]
+                ties, _ = make_ties(self.x, nodes, area, quads=quads, quad_t=t,
+                                       tape_half_t=tape_t, tol=TIE_TOL[target])
+                ties["quads"] = np.ascontiguousarray(quads)
+                kind = "quad"
+            if ties["tie_node"].size:
+                ties["kind"] = kind
+                self.ties.append(ties)
+        if not itf["delta_f"] > itf["delta0"]:
+            raise ValueError(f"cohesive: delta_f = {itf['delta_f']} must exceed delta0 = {itf['delta0']}")
+
+    def _tie_targets(self, ties):
+        """The target nodes (n, k) of a tie group and their weights (n, k): the quad's
+        bilinear shape functions at the tie point, or the segment's linear ones."""
+        if ties["kind"] == "quad":
+            xi, eta = ties["tie_xi"][:, 0], ties["tie_xi"][:, 1]
+            N = 0.25 * np.stack([(1 - xi) * (1 - eta), (1 + xi) * (1 - eta),
+                                 (1 + xi) * (1 + eta), (1 - xi) * (1 + eta)], axis=1)
+            return ties["quads"][ties["tie_quad"]], N
+        s_ = ties["tie_s"]
+        return self.seg[ties["tie_seg"]], np.stack([1.0 - s_, s_], axis=1)
+
+    def _set_tie_damping(self):
+        """Dashpot coefficient of every tie, ``c = 2 zeta sqrt(k m_red)`` (``zeta`` the
+        config's ``tie_damping``): ``k = max(K) A`` the tie's stiffness, ``m_red`` the
+        reduced mass of the tied node and its target point (the target nodes' masses
+        weighted by their shape functions), at the scaled masses of the run."""
+        zeta = float(self.inp.explicit["tie_damping"])
+        m = self.mass[:, 0]
+        for ties in self.ties:
+            targets, N = self._tie_targets(ties)
+            m1, m2 = m[ties["tie_node"]], np.sum(m[targets] * N, axis=1)
+            k = np.max(self.K_coh) * ties["tie_area"]
+            ties["tie_c"] = 2.0 * zeta * np.sqrt(k * m1 * m2 / (m1 + m2))
+
+    def tie_step(self) -> float:
+        """Critical step of the stiffest cohesive tie: 2 sqrt(m_red / (K A)), with the reduced
+        mass of the tied node and the mean mass of its target's nodes."""
+        dt = np.inf
+        m = self.mass[:, 0]
+        for ties in self.ties:
+            m1 = m[ties["tie_node"]]
+            if ties["kind"] == "quad":
+                m2 = m[ties["quads"][ties["tie_quad"]]].mean(axis=1)
+            else:
+                m2 = m[self.seg[ties["tie_seg"]]].mean(axis=1)
+            k = np.max(self.K_coh) * ties["tie_area"]
+            dt = min(dt, float(np.min(2.0 * np.sqrt(m1 * m2 / (m1 + m2) / k))))
+        return dt
+
+    def n_ties(self) -> int:
+        return int(sum(t["tie_node"].size for t in self.ties))
+
+    def _tie_omega2(self, m) -> np.ndarray:
+        """Gershgorin row of the cohesive springs at each tied node (masses ``m``): a spring
+        ``k = K A`` between two masses has diagonal + off-diagonal ``2 k / m``."""
+        w2 = np.zeros(self.mesh.n_nodes)
+        for ties in self.ties:
+            np.add.at(w2, ties["tie_node"], 2.0 * np.max(self.K_coh) * ties["tie_area"]
+                      / m[ties["tie_node"]])
+        return w2
+
+    def _stack_ties(self):
+        """The cohesive tie groups stacked by kind for :func:`bundle_forces` (their damage
+        histories become views of the stacked ones) and the order in which they act
+        (kind 0: quad, 1: beam; group)."""
+        quad, beam, order = [], [], []
+        for t in self.ties:
+            group = quad if t["kind"] == "quad" else beam
+            order.append((0 if group is quad else 1, len(group)))
+            group.append(t)
+        qa, qo = stack_groups(quad, QUAD_TIE_SPEC, shared=TIE_HISTORY)
+        ba, bo = stack_groups(beam, BEAM_TIE_SPEC, shared=TIE_HISTORY)
+        self.quad_ties = QuadTies(**qa, off=np.ascontiguousarray(
+            np.stack([qo["tie_node"], qo["quads"]], axis=1)))
+        self.beam_ties = BeamTies(**ba, off=bo["tie_node"])
+        self.tie_order = np.array(order, dtype=np.int64).reshape(-1, 2)
+
+    def tie_separation_max(self) -> float:
+        """Largest effective separation any cohesive tie reached (its history kappa, mm);
+        damage starts at delta0 (eq. 10)."""
+        return float(max((t["tie_kappa"].max(initial=0.0) for t in self.ties), default=0.0))
+
+    def debonded(self) -> int:
+        return int(sum(np.sum(t["tie_D"] >= 1.0) for t in self.ties))

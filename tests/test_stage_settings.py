@@ -1,0 +1,59 @@
+"""The settings rules pass to the stages (stages/stage_settings.py, stages/chain_settings.py):
+what each run reads of the config, and the chain's roles and scheduling."""
+from __future__ import annotations
+
+import json
+
+from harnesspipe import config as hp_config
+from harnesspipe.stages import chain_settings as chain
+from harnesspipe.stages import stage_settings as settings
+
+
+def test_rom_settings_carry_the_case_radius_and_follow_the_profile():
+    cfg = hp_config.load(overrides={"profile": "quick"})
+    profile = hp_config.resolution(cfg)
+    s = json.loads(settings.rom(cfg, profile, "cwb38_t2_open_coarse"))
+    assert s["r_o"] == cfg["hifi"]["extra_cases"]["cwb38_t2_open_coarse"]["r_o"]
+    assert s["maxfev"] == profile["simplex_maxfev"] and s["mesh"] == profile["rom"]
+    assert json.loads(settings.rom_on_hifi(cfg, profile, "cwb19_t2_closed"))["reference"] == "hifi"
+
+
+def test_tensile_settings_take_the_covering_material():
+    cfg = hp_config.load()
+    profile = hp_config.resolution(cfg)
+    s = json.loads(settings.tensile(cfg, profile, "open_tube"))
+    material = cfg["coverings"]["open_tube"]["material"]
+    assert s["nu"] == cfg["materials"][material]["nu"]
+    assert s["initial"] == cfg["tensile"]["initial_guess"][material]
+
+
+def test_branch_hifi_settings_hold_both_segments_and_the_paper_interface():
+    cfg = hp_config.load()
+    s = json.loads(settings.branch_hifi(cfg, hp_config.resolution(cfg)))
+    assert {"cwb38_t2_open_coarse", "cwb19_t2_open_coarse"} <= set(s["model"]["cases"])
+    assert "E2_over_E1" not in s["interface"]
+    assert s["interface"]["mu_rtb"] == cfg["paper"]["interface"]["mu_rtb"]
+
+
+def test_chain_roles_and_longest_virtual_test_first():
+    cfg = hp_config.load()
+    assert chain.role("cwb19_t2_closed") == "calibration"
+    assert chain.role("cwb19_t1_open_coarse") == "validation"
+    assert chain.role("twb19_t2") == "prediction"
+    p38 = chain.virtual_priority(cfg, "cwb38_t2_open_coarse", reused=False)
+    p19 = chain.virtual_priority(cfg, "cwb19_t2_open_coarse", reused=False)
+    assert 1.0 < p19 < p38 < 10.0
+    assert chain.virtual_priority(cfg, "cwb38_t2_open_coarse", reused=True) == 1.0
+
+
+def test_chain_starts_with_the_build_state_and_carries_it():
+    """The build step fits the end bands' wraps from the config's start value within
+    layers_bounds on the whole test; every later step takes it as a prior."""
+    cfg = hp_config.load()
+    s = json.loads(chain.fit_settings(cfg, "build", hp_config.resolution(cfg)))
+    assert s["names"] == ["end_tape_layers"] and s["method"] == "bounded"
+    assert s["start"]["end_tape_layers"] == cfg["hifi"]["build"]["end_tape_layers"]
+    assert s["bounds"] == cfg["hifi"]["pipeline"]["layers_bounds"]
+    assert s["window"] == cfg["hifi"]["pipeline"]["build_window"]
+    assert list(chain.STEPS)[0] == "build"
+    assert all("build" in step["prior"] for name, step in chain.STEPS.items() if name != "build")
