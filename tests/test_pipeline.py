@@ -14,7 +14,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from conftest import ARTIFACTS, copy_project
+from conftest import ARTIFACTS, copy_project, job_stats
 
 pytestmark = pytest.mark.pipeline
 
@@ -27,14 +27,7 @@ def snakemake(project: Path, *args: str) -> subprocess.CompletedProcess:
 
 def planned_jobs(project: Path) -> dict[str, int]:
     """Rule -> job count of a dry run ({} when nothing is to be done)."""
-    run = snakemake(project, "--dry-run")
-    assert run.returncode == 0, run.stdout + run.stderr
-    text = run.stdout + run.stderr
-    if "Nothing to be done" in text:
-        return {}
-    table = text.split("Job stats:")[1]
-    return {m.group(1): int(m.group(2)) for m in re.finditer(r"^(\w+)\s+(\d+)\s*$", table, re.M)
-            if m.group(1) != "total"}
+    return job_stats(snakemake(project, "--dry-run"))
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +49,8 @@ def test_outputs_of_every_stage(project):
     assert len(table3) == 6 and (table3[["E", "sigma_y", "K", "n"]] > 0).all().all()
     assert set(table3["reference"]) == {"hifi"}           # Sec. 4.3: the ROM of the virtual tests
     interface = pd.read_csv(res / "hifi" / "interface.csv")
-    assert list(interface["parameter"]) == ["mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1"]
+    assert list(interface["parameter"]) == ["mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1",
+                                            "end_tape_layers"]  # the chain's build step comes last
     assert sorted(p.name for p in (res / "hifi" / "virtual").iterdir()) == sorted(
         ["cwb19_t2_closed", "cwb19_t2_open_halflap", "cwb19_t2_open_coarse", "cwb19_t1_open_coarse",
          "cwb19_t2_fabric", "cwb10t1_9t2_fabric", "cwb38_t2_open_coarse", "twb19_t2", "twb38_t2"])
