@@ -108,7 +108,7 @@ def shell_materials(mesh, inp: HifiInputs):
         E1 = inp.coverings["fabric_tube"]["E"]
         E2 = inp.interface["E2_over_E1"] * E1
         nu12 = fab["nu12"]
-        mat[sel] = [E1, E2, nu12, fabric_shear_modulus(E1, E2, nu12), 0.0, 1.0]
+        mat[sel] = [E1, E2, nu12, fabric_shear_modulus(E1, E2, nu12), fab["compression_factor"], 1.0]
         thick[sel] = fab["t"]
         rho[sel] = cfg["materials"][fab["material"]]["rho"]
     return mat, thick, f_m * rho

@@ -27,6 +27,7 @@ ZETA_W = tuple(float(w) for w in _ZETA_W)
 SHEAR_CORRECTION = 5.0 / 6.0
 MAT_KIND = 5
 MAT_J2, MAT_ORTHOTROPIC = 0, 1
+MAT_COMPRESSION = 4   # eq. 12 rows (E1, E2, nu12, G12, r_c, MAT_ORTHOTROPIC): the yarns' compression factor
 
 # --- state layout (per element, N_STATE floats) ------------------------------------
 # thickness point k occupies [k*PT_SIZE, (k+1)*PT_SIZE):
@@ -242,7 +243,7 @@ def _through_thickness(st, me, ortho, mc, ms, c_ps, nu_r, dt, d_m, kappa, eps, s
         eps[1] = st[o + PT_EPS + 1] + dt * dy
         eps[2] = st[o + PT_EPS + 2] + dt * dxy
         if ortho:
-            orthotropic_plane_stress(eps, mc, ms, Dm, sig)
+            orthotropic_plane_stress(eps, mc, ms, Dm, me[MAT_COMPRESSION], sig)
         else:
             sold = st[o + PT_MAT:o + PT_MAT + STATE_SIZE]
             a11 = eps[0] - sold[P11]

@@ -324,7 +324,7 @@ def element_force(x, d, Jinv, dV, shear_ref, h0, h, mat, axes, state_old, state_
             c1, c2, co, si = _hencky(C11, C22, C12, eps)
             k = gp * N_THICKNESS + z
             if ortho:
-                orthotropic_plane_stress(eps, axes[gp, z, 0], axes[gp, z, 1], Do, sig)
+                orthotropic_plane_stress(eps, axes[gp, z, 0], axes[gp, z, 1], Do, 1.0, sig)
                 for i in range(STATE_SIZE):
                     state_new[k, i] = state_old[k, i]
             else:

@@ -159,7 +159,7 @@ def fabric_shear_modulus(E1: float, E2: float, nu12: float) -> float:
 
 
 @njit(cache=True)
-def orthotropic_plane_stress(eps, c, s, Dmat, sig):
+def orthotropic_plane_stress(eps, c, s, Dmat, r_c, sig):
     """Eq. 12 stress for an in-plane strain given in a frame (e1, e2) whose material
     direction 1 is ``c e1 + s e2`` (c = cos, s = sin of the angle from e1 to axis 1).
 
@@ -167,6 +167,11 @@ def orthotropic_plane_stress(eps, c, s, Dmat, sig):
     (3, 3) from :func:`orthotropic_plane_stress_stiffness` (material axes); writes
     ``sig`` (3,) in the (e1, e2) frame: sig = T^T Dmat T eps with T the engineering
     strain rotation, i.e. the stress that is work-conjugate to ``eps``.
+
+    ``r_c`` in (0, 1]: a woven fabric's yarns buckle in compression, so a compressive
+    stress along a yarn direction (t_11 < 0 or t_22 < 0, material axes) is scaled by
+    ``r_c`` (compressive-stress reduction of fabric membranes); ``r_c = 1`` is eq. 12 as
+    written.  The stress stays continuous (the scaling acts at t = 0).
     """
     cc, ss, cs = c * c, s * s, c * s
     m11 = cc * eps[0] + ss * eps[1] + cs * eps[2]
@@ -175,6 +180,10 @@ def orthotropic_plane_stress(eps, c, s, Dmat, sig):
     t11 = Dmat[0, 0] * m11 + Dmat[0, 1] * m22 + Dmat[0, 2] * m12
     t22 = Dmat[1, 0] * m11 + Dmat[1, 1] * m22 + Dmat[1, 2] * m12
     t12 = Dmat[2, 0] * m11 + Dmat[2, 1] * m22 + Dmat[2, 2] * m12
+    if t11 < 0.0:
+        t11 *= r_c
+    if t22 < 0.0:
+        t22 *= r_c
     sig[0] = cc * t11 + ss * t22 - 2.0 * cs * t12
     sig[1] = ss * t11 + cc * t22 + 2.0 * cs * t12
     sig[2] = cs * (t11 - t22) + (cc - ss) * t12
