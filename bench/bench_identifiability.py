@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchlib import write_section
+from benchlib import section_tail, write_section
 
 from harnesspipe import config as cfgmod
 from harnesspipe.calibrate import uncertainty
@@ -115,7 +115,7 @@ combination of it with the others (the flow stress at the strains the test reach
 "ROM identifiability").  Each fit's own standard errors (Fisher, with the noise read off
 the rows, and the replicate sandwich), correlations and chi-square are in its fit.json.
 """
-    write_section(HEADING, text)
+    write_section(HEADING, text + "\n" + section_tail(HEADING))
 
 
 if __name__ == "__main__":
