@@ -17,12 +17,11 @@ for the rows the stages' objectives read before issue 29 and for every measured 
 from __future__ import annotations
 
 import numpy as np
-
 from benchlib import section_tail, write_section
 
 from harnesspipe import config as cfgmod
 from harnesspipe.calibrate import uncertainty
-from harnesspipe.data.generators import three_point, tensile_tests
+from harnesspipe.data.generators import tensile_tests, three_point
 
 HEADING = "## Identifiability (Cramer-Rao bound)"
 NAMES = ["E", "sigma_y", "K", "n"]

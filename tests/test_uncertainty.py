@@ -39,7 +39,7 @@ def test_standard_errors_match_the_spread_of_monte_carlo_fits():
     estimates, reported = [], []
     for _ in range(300):
         F = saturating(truth) + sigma * rng.standard_normal(U.size)
-        sol = least_squares(lambda x: saturating({"A": np.exp(x[0]), "tau": np.exp(x[1])}) - F,
+        sol = least_squares(lambda x, F=F: saturating({"A": np.exp(x[0]), "tau": np.exp(x[1])}) - F,
                             np.log([9.0, 5.0]), xtol=1e-12, ftol=1e-12)
         fitted = {"A": np.exp(sol.x[0]), "tau": np.exp(sol.x[1])}
         estimates.append(sol.x)
@@ -205,7 +205,7 @@ def test_fisher_intervals_cover_the_truth_of_noisy_nonlinear_fits():
     estimates, covered, ses = [], 0, []
     for _ in range(200):
         R = saturating_rows(truth) + sigma * rng.standard_normal((3, ROWS.size))
-        sol = least_squares(lambda x: saturating_rows({"A": np.exp(x[0]), "tau": np.exp(x[1])})
+        sol = least_squares(lambda x, R=R: saturating_rows({"A": np.exp(x[0]), "tau": np.exp(x[1])})
                             - R.mean(axis=0), np.log([9.0, 5.0]), xtol=1e-12, ftol=1e-12)
         fitted = {"A": np.exp(sol.x[0]), "tau": np.exp(sol.x[1])}
         se = unc.fit_statistics(saturating_rows, fitted, ["A", "tau"], ROWS, R)["standard_error"]

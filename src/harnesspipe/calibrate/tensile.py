@@ -31,8 +31,13 @@ from scipy.optimize import minimize_scalar
 from harnesspipe.calibrate.hardening import flow_stresses, hardening_from_three
 from harnesspipe.calibrate.objective import l2_error
 from harnesspipe.calibrate.simplex import FitResult, nelder_mead
-from harnesspipe.models.tensile import (POISSON, FabricGeometry, resolution, simulate,
-                                        simulate_fabric)
+from harnesspipe.models.tensile import (
+    POISSON,
+    FabricGeometry,
+    resolution,
+    simulate,
+    simulate_fabric,
+)
 
 PARAMETERS = ("E", "sigma_y", "K", "n")
 INITIAL_GUESS = {
@@ -42,6 +47,7 @@ INITIAL_GUESS = {
 }
 
 
+FABRIC_SAMPLE = FabricGeometry()  # Sec. 2.1: 150 x 49 x 0.6, gauge 75
 NOISE_SIGMAS = 4.0  # a plastic shortfall must exceed this many standard deviations of the noise
 
 
@@ -203,7 +209,7 @@ def calibrate_tube(component: str, measured: pd.DataFrame, *, initial: dict | No
                    log_path=log_path, key=key)
 
 
-def fabric_closed_form(displacement, replicates, geometry: FabricGeometry = FabricGeometry(),
+def fabric_closed_form(displacement, replicates, geometry: FabricGeometry = FABRIC_SAMPLE,
                        linear_fraction: float = 0.1, tol: float = 0.005) -> dict:
     """E and sigma_y by eq. 3 (:func:`linear_region`, as in :func:`calibrate_fabric`) of each
     replicate force curve on the ``displacement`` grid: {"E": [...], "sigma_y": [...]}.
@@ -215,7 +221,7 @@ def fabric_closed_form(displacement, replicates, geometry: FabricGeometry = Fabr
 
 
 def calibrate_fabric(measured: pd.DataFrame, *, initial: dict | None = None,
-                     geometry: FabricGeometry = FabricGeometry(), preset: str = "default",
+                     geometry: FabricGeometry = FABRIC_SAMPLE, preset: str = "default",
                      nu: float | None = None, xatol: float = 1e-6, fatol: float = 1e-8,
                      maxfev: int = 600, restarts: int = 3, log_path=None,
                      linear_fraction: float = 0.1, tol: float = 0.005,
