@@ -135,7 +135,8 @@ def test_stage_meets_the_criterion_on_the_shipped_data(test_id, tmp_path):
     5 % at eps_p = 2e-3, 5e-3, 2e-2 (sigma_Y, K, n alone are not determined to 5 % by any
     estimator: bench/RESULTS.md, Identifiability); the model reproduces the specimens' mean to
     within the noise (chi-square passes), and the noise read off the rows is the twin's (0.5 %
-    of each specimen's peak force, to 10 %).
+    of each specimen's peak force, to 15 %: three sampling
+    standard deviations of the estimate from 3 x 199 rows).
 
     Uncertainty: E is eq. 13 on each replicate, so the sandwich's standard error of ln E is
     the spread of these specimens' own E over sqrt(3) (their 4 % scatter: 1-5 %), to 30 %
@@ -164,7 +165,7 @@ def test_stage_meets_the_criterion_on_the_shipped_data(test_id, tmp_path):
     assert fit["rows"] == F.shape[1] == cfg["synthesize"]["rows"]
     assert fit["chi_square"]["pass"], fit["chi_square"]
     noise = cfg["synthesize"]["noise_fraction"] * np.sqrt(np.mean(F.max(axis=1) ** 2))
-    assert fit["fisher"]["noise_sigma_N"] == pytest.approx(noise, rel=0.1)
+    assert fit["fisher"]["noise_sigma_N"] == pytest.approx(noise, rel=0.15)   # ~3 sd of the estimate
     E_k = [s["E"] for s in read_truth(data)[test_id]["samples"].values()]
     spread = np.std(np.log(E_k), ddof=1) / np.sqrt(len(E_k))
     assert fit["standard_error_dof"] == len(E_k) - 1

@@ -218,7 +218,8 @@ def test_stage_calibrates_the_shipped_noisy_data(component, tmp_path):
     measured row is fitted; E within 5 % of truth and the flow stress within 5 % at eps_p =
     1e-2 and 0.1; the model reproduces the specimens' mean to within the noise (chi-square
     passes), the noise read off the rows is the twin's (0.5 % of each specimen's peak, to
-    10 %), and the sandwich is on the replicates' two degrees of freedom."""
+    15 %: three sampling standard deviations of the estimate from 3 x 199 rows), and the
+    sandwich is on the replicates' two degrees of freedom."""
     import json
 
     from conftest import REPO
@@ -247,5 +248,5 @@ def test_stage_calibrates_the_shipped_noisy_data(component, tmp_path):
     assert fit["rows"] == F.shape[1] == cfg["synthesize"]["rows"]
     assert fit["chi_square"]["pass"] and fit["chi_square"]["dof"] == fit["rows"] - 4
     noise = cfg["synthesize"]["noise_fraction"] * np.sqrt(np.mean(F.max(axis=1) ** 2))
-    assert fit["fisher"]["noise_sigma_N"] == pytest.approx(noise, rel=0.1)
+    assert fit["fisher"]["noise_sigma_N"] == pytest.approx(noise, rel=0.15)   # ~3 sd of the estimate
     assert fit["standard_error_dof"] == 2

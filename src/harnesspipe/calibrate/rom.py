@@ -5,7 +5,7 @@ plus 5 % per component) then fits the hardening parameters named in
 ``settings["rom"]["simplex_parameters"]`` -- (K, n) in the paper, (sigma_Y, K, n)
 by default here (see :mod:`harnesspipe.calibrate.eq13` for why) -- of a beam
 model of the same test, minimising the l2 force error of eq. 4 on the
-reference grid.
+abscissa it is given (the stage gives every measured row).
 
 ``settings`` (built from the config by the Snakemake rule):
 ``r_o``, ``supports``, ``mu`` (roller friction), ``three_point`` (span, overhang, deflection),

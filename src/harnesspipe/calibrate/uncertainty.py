@@ -52,6 +52,7 @@ from scipy import stats
 
 LOG_STEP = 0.01       # central-difference step in ln p
 SINGULAR = 1e-7       # singular value of J below this times the largest: direction not determined
+OUTLIER = 4.0        # row-noise estimate: chord residuals beyond this many robust scales are kinks
 CHI2_ALPHA = 0.01    # chi-square check: a residual this unlikely under the noise alone fails
 BOUNDARY = 1e-6       # a column of J this small against the largest: the parameter sits at ~0
 SHARE = 1e-3          # a parameter with a larger share in such a direction is not determined either
@@ -91,7 +92,8 @@ def _blank_undetermined(cov: np.ndarray, V: np.ndarray, keep: np.ndarray) -> np.
 def log_covariance(J: np.ndarray, variance: float) -> np.ndarray:
     """``variance * (J^T J)^-1``; directions the curve does not see get an infinite variance."""
     P, V, keep = _pseudo_inverse(J)
-    return _blank_undetermined(variance * P @ P.T, V, keep)
+    cov = variance * P @ P.T
+    return _blank_undetermined(0.5 * (cov + cov.T), V, keep)   # symmetric to the last digit
 
 
 def residual_variance(residual: np.ndarray, n_parameters: int) -> float:
@@ -189,18 +191,20 @@ def row_noise_variance(u, F) -> float:
     Each interior row against the chord of its neighbours (spacings h1, h2):
     e_i = F_i - (h2 F_(i-1) + h1 F_(i+1)) / (h1 + h2) has variance
     s^2 (1 + (h1^2 + h2^2) / (h1 + h2)^2) for noise of variance s^2 (3/2 s^2 on a
-    uniform grid), while a smooth curve leaves only O(h^2 F'').  The scale is the
-    median of |e_i| / sqrt(factor) over 0.6745 (the normal's median absolute value),
-    so that the few rows at a kink of the curve (yield, contact) do not count."""
+    uniform grid), while a smooth curve leaves only O(h^2 F'').  The normalised e_i are
+    first scaled robustly (median |e| / 0.6745, the normal's median absolute value); those
+    beyond OUTLIER times that scale -- rows at a kink of the curve (yield, contact) -- are
+    left out, and s^2 is the mean square of the rest (about twice as efficient as the
+    median alone: ~5 % in s from 600 rows)."""
     u, F = np.asarray(u, dtype=float), np.asarray(F, dtype=float)
     if u.shape != F.shape or u.size < 5:
         raise ValueError(f"need matching u and F with at least 5 rows, got {u.shape} and {F.shape}")
     h1, h2 = np.diff(u)[:-1], np.diff(u)[1:]
     if np.any(h1 <= 0.0) or np.any(h2 <= 0.0):
         raise ValueError("the rows' abscissa must increase strictly")
-    e = F[1:-1] - (h2 * F[:-2] + h1 * F[2:]) / (h1 + h2)
-    factor = 1.0 + (h1**2 + h2**2) / (h1 + h2) ** 2
-    return float((np.median(np.abs(e) / np.sqrt(factor)) / stats.norm.ppf(0.75)) ** 2)
+    e = (F[1:-1] - (h2 * F[:-2] + h1 * F[2:]) / (h1 + h2)) / np.sqrt(1.0 + (h1**2 + h2**2) / (h1 + h2) ** 2)
+    scale = np.median(np.abs(e)) / stats.norm.ppf(0.75)
+    return float(np.mean(e[np.abs(e) <= OUTLIER * scale] ** 2))
 
 
 def chi_square(residual, variance: float, n_parameters: int, alpha: float = CHI2_ALPHA) -> dict:
