@@ -94,66 +94,83 @@ def test_recovers_table3_from_noise_free_curves(case):
     assert fit.E_eq13 == pytest.approx(truth["E"], rel=0.02)   # eq. 13 alone is close, too
 
 
-def shipped_mean(case):
-    """Mean curve of the shipped three-point samples of ``case`` on a 101-point grid."""
+def shipped_rows(case):
+    """Every measured row of the shipped three-point specimens of ``case``: (u, forces n x N)."""
     from conftest import REPO
+
     from harnesspipe.data.experimental import load_all
+    from harnesspipe.stages.data import Prepared
     (ts,) = [t for t in load_all(REPO / "data" / "experimental").values() if t.entry["item"] == case]
-    return ts.grid, ts.mean
+    samples = {s.name: {"displacement_mm": s.displacement, "force_N": s.force} for s in ts.samples}
+    return Prepared(ts.test_id, ts.entry, ts.grid, ts.mean, ts.lo, ts.hi, samples).rows()
 
 
 @pytest.mark.parametrize("case", ["cwb19_t2_closed", "cwb19_t2_open_halflap", "cwb19_t2_open_coarse",
                                   "cwb19_t2_fabric", "cwb10t1_9t2_fabric"])
 def test_shipped_noisy_data_gives_E_within_5_percent(case):
     cfg = cfgmod.load()
-    u, F = shipped_mean(case)
+    u, F = shipped_rows(case)
     settings = settings_for(cfg, case)
     settings["mesh"] = cfg["profiles"]["default"]["rom"]
-    E, _ = rom_fit.effective_modulus(u, F, settings)
+    E, _ = rom_fit.effective_modulus(u, F.mean(axis=0), settings)
     assert E == pytest.approx(cfg["paper"]["table3"][case]["E"], rel=0.05)
 
 
-@pytest.mark.slow
-def test_shipped_noisy_closed_tube_data_calibrates_within_5_percent():
-    """The closed-tube set, whose elastic limit lies well inside the test (5.7 % of the
-    span), lands within 5 % of truth from the noisy mean of three scattered specimens.  Its
-    data fix sigma_Y, K, n only to 7-23 % (Cramer-Rao bound, bench/RESULTS.md); for the other
-    sets 5 % is out of any estimator's reach, see test_stage_reports_what_the_data_determine."""
-    cfg = cfgmod.load()
-    u, F = shipped_mean("cwb19_t2_closed")
-    settings = settings_for(cfg, "cwb19_t2_closed", maxfev=600)
-    settings["mesh"] = cfg["profiles"]["default"]["rom"]
-    fit = rom_fit.fit(u, F, settings)
-    for name, value in cfg["paper"]["table3"]["cwb19_t2_closed"].items():
-        assert fit.parameters[name] == pytest.approx(value, rel=0.05), name
+# the criterion of issue 29: E, and the flow stress at plastic strains the test reaches
+FLOW_STRAINS = (2e-3, 5e-3, 2e-2)
+THREE_POINT_TESTS = ["bend_cwb19_t2_closed", "bend_cwb19_t2_open_halflap", "bend_cwb19_t2_open_coarse",
+                     "bend_cwb19_t2_fabric", "bend_cwb10t1_9t2_fabric", "bend_cwb19_t1_open_coarse"]
+
+
+def flow(p, eps_p):
+    """Eq. 2 flow stress sigma_Y + K eps_p^n."""
+    return p["sigma_y"] + p["K"] * eps_p ** p["n"]
 
 
 @pytest.mark.slow
-def test_stage_reports_what_the_data_determine(tmp_path):
-    """The ROM stage on the shipped half-lap set writes standard errors with its fit: E is
-    determined (eq. 13 on each replicate: SE < 5 %, and the specimens' own mean E within 2 SE),
-    sigma_Y is not (SE above 30 % or none: the Cramer-Rao bound of the data is 86 % with E
-    known), and the truth of K and n lies within 3 SE of the fit."""
+@pytest.mark.parametrize("test_id", THREE_POINT_TESTS)
+def test_stage_meets_the_criterion_on_the_shipped_data(test_id, tmp_path):
+    """The ROM stage on the shipped specimens, with the mesh the data were made with (default
+    profile): every measured row is fitted; E within 5 % of truth and the flow stress within
+    5 % at eps_p = 2e-3, 5e-3, 2e-2 (sigma_Y, K, n alone are not determined to 5 % by any
+    estimator: bench/RESULTS.md, Identifiability); the model reproduces the specimens' mean to
+    within the noise (chi-square passes), and the noise read off the rows is the twin's (0.5 %
+    of each specimen's peak force, to 15 %: three sampling
+    standard deviations of the estimate from 3 x 199 rows).
+
+    Uncertainty: E is eq. 13 on each replicate, so the sandwich's standard error of ln E is
+    the spread of these specimens' own E over sqrt(3) (their 4 % scatter: 1-5 %), to 30 %
+    (eq. 13's noise on each replicate); without the 1/n of the mean it would be 1.7 times
+    that, and the Fisher figure (load-cell noise only, ~0.1 %) is far below it."""
     import json
+
     from conftest import REPO
+
     from harnesspipe.data.experimental import read_manifest
     from harnesspipe.data.synthesize import read_truth
     from harnesspipe.stages import data as stage_data
     from harnesspipe.stages import rom as rom_stage
-    data, case = REPO / "data" / "experimental", "cwb19_t2_open_halflap"
-    (test_id,) = [t for t, e in read_manifest(data)["tests"].items()
-                  if e["kind"] == "three_point" and e["item"] == case]
+    data, cfg = REPO / "data" / "experimental", cfgmod.load()
+    case = read_manifest(data)["tests"][test_id]["item"]
     stage_data.prepare_test(data, test_id, tmp_path / "ref.h5")
-    cfg = cfgmod.load()
-    settings = settings_for(cfg, case, maxfev=300)
+    settings = settings_for(cfg, case, maxfev=cfg["profiles"]["default"]["simplex_maxfev"])
+    settings["mesh"] = cfg["profiles"]["default"]["rom"]
     rom_stage.fit_case(case, tmp_path / "ref.h5", settings, tmp_path / "fit")
     fit = json.loads((tmp_path / "fit" / "fit.json").read_text())
-    p, se = fit["parameters"], fit["standard_error"]
-    truth = read_truth(data)[test_id]
-    E_specimens = np.exp(np.mean([np.log(s["E"]) for s in truth["samples"].values()]))
-    assert fit["standard_error_dof"] == 2
-    assert se["E"] < 0.05
-    assert abs(math.log(p["E"] / E_specimens)) < 2 * se["E"]
-    assert se["sigma_y"] is None or se["sigma_y"] > 0.3
-    for name in ("K", "n"):
-        assert abs(math.log(p[name] / truth["parameters"][name])) < 3 * se[name], name
+    p, truth = fit["parameters"], read_truth(data)[test_id]["parameters"]
+    assert p["E"] == pytest.approx(truth["E"], rel=0.05)
+    for eps_p in FLOW_STRAINS:
+        assert flow(p, eps_p) == pytest.approx(flow(truth, eps_p), rel=0.05), eps_p
+    _, F = stage_data.read_prepared(tmp_path / "ref.h5").rows()
+    assert fit["rows"] == F.shape[1] == cfg["synthesize"]["rows"]
+    assert fit["chi_square"]["pass"], fit["chi_square"]
+    noise = cfg["synthesize"]["noise_fraction"] * np.sqrt(np.mean(F.max(axis=1) ** 2))
+    assert fit["fisher"]["noise_sigma_N"] == pytest.approx(noise, rel=0.15)   # ~3 sd of the estimate
+    E_k = [s["E"] for s in read_truth(data)[test_id]["samples"].values()]
+    spread = np.std(np.log(E_k), ddof=1) / np.sqrt(len(E_k))
+    assert fit["standard_error_dof"] == len(E_k) - 1
+    assert fit["standard_error"]["E"] == pytest.approx(spread, rel=0.3)
+    assert fit["fisher"]["standard_error"]["E"] < 0.2 * fit["standard_error"]["E"]
+    rho = np.array(fit["fisher"]["correlation"], dtype=float)
+    np.testing.assert_allclose(rho, rho.T)
+    np.testing.assert_allclose(np.diag(rho), 1.0)

@@ -4,11 +4,21 @@ import pandas as pd
 import pytest
 
 import harnesspipe  # noqa: F401  (sets the Numba cache)
-from harnesspipe.calibrate.tensile import (calibrate_fabric, calibrate_tube, force_error,
-                                           linear_region)
+from harnesspipe.calibrate.tensile import (
+    calibrate_fabric,
+    calibrate_tube,
+    force_error,
+    linear_region,
+)
 from harnesspipe.fe.materials.hardening import flow_stress
-from harnesspipe.models.tensile import (FabricGeometry, TubeGeometry, resolution, simulate,
-                                        simulate_axisymmetric_tube, simulate_shell_tube)
+from harnesspipe.models.tensile import (
+    FabricGeometry,
+    TubeGeometry,
+    resolution,
+    simulate,
+    simulate_axisymmetric_tube,
+    simulate_shell_tube,
+)
 
 TABLE2 = {"closed_tube": (1559.0, 8.6, 25.6, 0.12), "open_tube": (698.0, 8.8, 23.1, 0.83),
           "fabric_tube": (93.5, 10.0, 30.8, 0.60)}
@@ -89,7 +99,7 @@ def _uniaxial_tau(eps, E, sigma_y, K, n):
 
 @pytest.mark.parametrize("truth", [(93.5, 10.0, 30.8, 0.60), (120.0, 6.0, 50.0, 1.4)])
 def test_eq3_linear_region_and_departure_point(truth):
-    E, sigma_y, K, n = truth
+    E, sigma_y, _, _ = truth
     geom = FabricGeometry()
     region = linear_region(synthetic_fabric_curve(*truth), geom.gauge, geom.area)
     assert region.E == pytest.approx(E, rel=1e-3)
@@ -110,13 +120,77 @@ def test_tube_calibration_recovers_table2(component):
     assert fit.fun == pytest.approx(force_error(measured, simulate(component, *params.values())))
 
 
+def twin_rows(component, params, rows=201):
+    """A twin-like record: the default-preset model curve (as the shipped data are made)
+    read at ``rows`` equally spaced rows of the model's displacement (like-for-like: the
+    fits below use the same preset, so no mesh error mixes into the statistics)."""
+    curve = simulate(component, *params, preset="default")
+    u = np.linspace(0.0, curve["displacement_mm"].iloc[-1], rows)
+    return u, np.interp(u, curve["displacement_mm"], curve["force_N"])
+
+
 def test_fabric_calibration_recovers_table2():
+    """Noise-free rows of the default model: eq. 3 then the simplex on all four give back
+    Table 2's fabric to 0.5 % (eq. 3 alone is 0.1-0.2 % off on such a curve)."""
     truth = TABLE2["fabric_tube"]
-    measured = simulate("fabric_tube", *truth, n_steps=100)
-    params, fit = calibrate_fabric(measured)
+    u, F = twin_rows("fabric_tube", truth)
+    params, fit = calibrate_fabric(pd.DataFrame({"displacement_mm": u, "force_N": F}))
     for name, value in zip(("E", "sigma_y", "K", "n"), truth):
-        assert params[name] == pytest.approx(value, rel=0.02)
+        assert params[name] == pytest.approx(value, rel=0.005), name
     assert len(fit.trace) == fit.nfev
+
+
+def noisy_fabric_specimens(seed=41, noise_fraction=0.005, samples=3):
+    """Three specimens at Table 2's fabric with the twin's load-cell noise (no parameter
+    scatter: the truth is then what the fit to their mean should find)."""
+    u, F = twin_rows("fabric_tube", TABLE2["fabric_tube"])
+    rng = np.random.default_rng(seed)
+    return u, F + noise_fraction * F.max() * rng.standard_normal((samples, u.size))
+
+
+@pytest.mark.slow
+def test_fabric_fit_is_efficient_on_noisy_specimens():
+    """On three noisy specimens of one truth, the fit through their mean (every row) is within
+    2.5 Fisher standard errors of the truth in every parameter, which the paper's route -- E
+    and sigma_Y held at eq. 3, the simplex on (K, n) -- is not: its eq. 3 values carry the
+    noise of a few rows, and K, n absorb it (bench/RESULTS.md, Identifiability, by hand)."""
+    from harnesspipe.calibrate.uncertainty import fit_statistics
+    u, R = noisy_fabric_specimens()
+    measured = pd.DataFrame({"displacement_mm": u, "force_N": R.mean(axis=0)})
+    names = ("E", "sigma_y", "K", "n")
+
+    def on_rows(p):
+        c = simulate("fabric_tube", *(p[k] for k in names))
+        return np.interp(u, c["displacement_mm"], c["force_N"])
+
+    def z_scores(params):
+        se = fit_statistics(on_rows, {k: params[k] for k in names}, list(names), u, R)
+        return {k: abs(np.log(params[k] / v)) / se["standard_error"][k]
+                for k, v in zip(names, TABLE2["fabric_tube"])}, se
+    z, stats = z_scores(calibrate_fabric(measured)[0])
+    assert max(z.values()) < 2.5, z
+    assert stats["chi_square"]["pass"]
+    z_paper, _ = z_scores(calibrate_fabric(measured, simplex_parameters=("K", "n"))[0])
+    assert max(z_paper.values()) > 2.5, z_paper
+
+
+def test_fabric_fit_refuses_an_unknown_parameter_set():
+    u, F = twin_rows("fabric_tube", TABLE2["fabric_tube"], rows=51)
+    with pytest.raises(ValueError, match="simplex_parameters"):
+        calibrate_fabric(pd.DataFrame({"displacement_mm": u, "force_N": F}),
+                         simplex_parameters=("sigma_y", "K", "n"))
+
+
+def test_eq4_reads_every_measured_row():
+    """The model (26 nodes) is interpolated onto the measured rows, not the rows onto the
+    model: a disturbance of one row between two nodes shows in eq. 4."""
+    model = simulate("fabric_tube", *TABLE2["fabric_tube"], preset="default")
+    u, F = twin_rows("fabric_tube", TABLE2["fabric_tube"])
+    measured = pd.DataFrame({"displacement_mm": u, "force_N": F})
+    assert force_error(measured, model) == pytest.approx(0.0, abs=1e-9)
+    between = int(np.argmin(np.abs(u - 0.5 * (model["displacement_mm"][3] + model["displacement_mm"][4]))))
+    measured.loc[between, "force_N"] += 2.0
+    assert force_error(measured, model) == pytest.approx(2.0, rel=1e-9)
 
 
 def test_simulate_rejects_bad_input():
@@ -128,22 +202,25 @@ def test_simulate_rejects_bad_input():
         simulate("fabric_tube", 93.5, 10.0, 30.8, 0.6, model="axisymmetric")
 
 
-# what the shipped noisy data determine to 5 %: bench/RESULTS.md "Identifiability (Cramer-Rao
-# bound)" -- the load-cell noise alone leaves sigma_Y, K, n of the closed tube uncertain by
-# 20-63 % and K, n of the fabric by 5-7 %, whatever the estimator
-WITHIN_5_PERCENT = {"closed_tube": ("E",), "open_tube": ("E", "sigma_y", "K", "n"),
-                    "fabric_tube": ("E", "sigma_y")}
+# the criterion of issue 29: E, and the flow stress at plastic strains the test reaches
+FLOW_STRAINS = (1e-2, 0.1)
+
+
+def flow(p, eps_p):
+    """Eq. 2 flow stress sigma_Y + K eps_p^n."""
+    return p["sigma_y"] + p["K"] * eps_p ** p["n"]
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("component", sorted(WITHIN_5_PERCENT))
+@pytest.mark.parametrize("component", ["closed_tube", "open_tube", "fabric_tube"])
 def test_stage_calibrates_the_shipped_noisy_data(component, tmp_path):
-    """The tensile stage (default preset) on the shipped means: what the data determine is
-    within 5 % of truth, with a standard error below 10 %; the truth of every parameter with a
-    standard error lies in its 95 % interval (Student t on the replicates' degrees of freedom;
-    one the data do not determine has none, nor has a fit on a bound)."""
+    """The tensile stage (default preset, as the data) on the shipped specimens: every
+    measured row is fitted; E within 5 % of truth and the flow stress within 5 % at eps_p =
+    1e-2 and 0.1; the model reproduces the specimens' mean to within the noise (chi-square
+    passes), the noise read off the rows is the twin's (0.5 % of each specimen's peak, to
+    15 %: three sampling standard deviations of the estimate from 3 x 199 rows), and the
+    sandwich is on the replicates' two degrees of freedom."""
     import json
-    import math
 
     from conftest import REPO
 
@@ -163,15 +240,13 @@ def test_stage_calibrates_the_shipped_noisy_data(component, tmp_path):
     fit_component(component, tmp_path / "ref.h5", settings, tmp_path / "fit")
     fit = json.loads((tmp_path / "fit" / "fit.json").read_text())
     truth = read_truth(data)[test_id]["parameters"]
-    from scipy.stats import t as student_t
-    p, se = fit["parameters"], fit["standard_error"]
-    on_bound = min(p[k] / truth[k] for k in p) < 1e-3
-    for name in WITHIN_5_PERCENT[component]:
-        assert p[name] == pytest.approx(truth[name], rel=0.05), name
-        assert on_bound or se[name] < 0.1, name        # and the data say so
-    if on_bound:       # closed tube: sigma_Y driven to ~0 (n = 0.12 hides the yield): no errors
-        assert all(v is None for v in se.values())
-    t95 = student_t.ppf(0.975, fit["standard_error_dof"])     # 4.30 for three replicates
-    for name, s in se.items():
-        if s is not None:
-            assert abs(math.log(p[name] / truth[name])) < t95 * s, name
+    p = fit["parameters"]
+    assert p["E"] == pytest.approx(truth["E"], rel=0.05)
+    for eps_p in FLOW_STRAINS:
+        assert flow(p, eps_p) == pytest.approx(flow(truth, eps_p), rel=0.05), eps_p
+    _, F = stage_data.read_prepared(tmp_path / "ref.h5").rows()
+    assert fit["rows"] == F.shape[1] == cfg["synthesize"]["rows"]
+    assert fit["chi_square"]["pass"] and fit["chi_square"]["dof"] == fit["rows"] - 4
+    noise = cfg["synthesize"]["noise_fraction"] * np.sqrt(np.mean(F.max(axis=1) ** 2))
+    assert fit["fisher"]["noise_sigma_N"] == pytest.approx(noise, rel=0.15)   # ~3 sd of the estimate
+    assert fit["standard_error_dof"] == 2

@@ -5,7 +5,7 @@ plus 5 % per component) then fits the hardening parameters named in
 ``settings["rom"]["simplex_parameters"]`` -- (K, n) in the paper, (sigma_Y, K, n)
 by default here (see :mod:`harnesspipe.calibrate.eq13` for why) -- of a beam
 model of the same test, minimising the l2 force error of eq. 4 on the
-reference grid.
+abscissa it is given (the stage gives every measured row).
 
 ``settings`` (built from the config by the Snakemake rule):
 ``r_o``, ``supports``, ``mu`` (roller friction), ``three_point`` (span, overhang, deflection),
@@ -43,7 +43,11 @@ import numpy as np
 
 from harnesspipe import rom
 from harnesspipe.calibrate import eq13, uncertainty
-from harnesspipe.calibrate.hardening import flow_stresses, hardening_from_three, hardening_from_two
+from harnesspipe.calibrate.hardening import (
+    flow_stresses,
+    hardening_from_three,
+    hardening_from_two,
+)
 from harnesspipe.calibrate.objective import l2_error, objective_key
 from harnesspipe.calibrate.simplex import FitResult, nelder_mead
 
@@ -152,32 +156,31 @@ def fit(u, F, settings: dict, log_path=None) -> RomFit:
     return RomFit(params_of(res.x), E_eq13, sigma_y_eq13, res)
 
 
-def standard_errors(u, F, params: dict, settings: dict, replicates) -> tuple[dict | None, int | None]:
-    """Standard errors of ln E, ln sigma_Y, ln K, ln n of a fit ``params`` to the mean F(u)
-    of the measured ``replicates`` and their degrees of freedom
-    (:func:`harnesspipe.calibrate.uncertainty.fit_standard_errors`): with two or more
-    replicates E (and sigma_Y when the simplex does not fit it) by eq. 13 on each replicate
-    -- E with the fit's model-consistent factor --, the simplex's parameters by least
-    squares; with one, the simplex's parameters from the fit residual only.  (None, None)
-    without replicates (a hi-fi reference is one deterministic curve: its residual is model
-    error, not scatter)."""
+def fit_uncertainty(u, replicates, params: dict, settings: dict) -> dict:
+    """fit.json's uncertainty entries of a fit ``params`` to the mean of the measured
+    ``replicates`` (n x N forces on the rows ``u``;
+    :func:`harnesspipe.calibrate.uncertainty.fit_summary`): the replicate sandwich with E
+    (and sigma_Y when the simplex does not fit it) by eq. 13 on each replicate -- E with
+    the fit's model-consistent factor -- and the simplex's parameters by least squares;
+    the Fisher standard errors, correlations and chi-square of all four.  All None
+    without replicates (a hi-fi reference is one deterministic curve: its residual is
+    model error, not noise)."""
     if replicates is None:
-        return None, None
-    u = np.asarray(u, dtype=float)
+        return dict.fromkeys(("standard_error", "standard_error_dof", "replicate_correlation",
+                              "fisher", "chi_square"))
+    u, R = np.asarray(u, dtype=float), np.atleast_2d(np.asarray(replicates, dtype=float))
     span, r_o, rs = settings["three_point"]["span"], settings["r_o"], settings["rom"]
     fitted = ["K", "n"]
     closed_form = {}
     if "sigma_y" in rs["simplex_parameters"]:
         fitted.insert(0, "sigma_y")
-    elif len(replicates) >= 2:
+    elif len(R) >= 2:
         closed_form["sigma_y"] = [eq13.yield_stress(u, Fk, span, r_o, rs["yield_deflection"])
-                                  for Fk in replicates]
-    if len(replicates) >= 2:
+                                  for Fk in R]
+    if len(R) >= 2:
         def eq13_modulus(force):
             return eq13.effective_modulus(u, force, span, r_o, rs["linear_window"])
-        factor = params["E"] / eq13_modulus(F)
-        closed_form["E"] = [factor * eq13_modulus(Fk) for Fk in replicates]
-
-    se = uncertainty.fit_standard_errors(lambda p: simulate_on(u, p, settings), params, fitted, F,
-                                         replicates, closed_form)
-    return se, uncertainty.error_dof(len(u), fitted, replicates)
+        factor = params["E"] / eq13_modulus(R.mean(axis=0))
+        closed_form["E"] = [factor * eq13_modulus(Fk) for Fk in R]
+    return uncertainty.fit_summary(lambda p: simulate_on(u, p, settings), params, fitted, u, R,
+                                   closed_form)

@@ -75,6 +75,26 @@ class Prepared:
         return np.array([np.interp(self.grid, s["displacement_mm"], s["force_N"])
                          for s in self.samples.values()])
 
+    def rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(u, F)``: the measured rows inside the common range 0..grid[-1] and every
+        replicate's force at them (n_samples x n_rows).
+
+        The rows are the first specimen's displacement samples; specimens exported at the
+        same abscissa (one DAQ rate, one crosshead rate: the usual case) give their own
+        forces, unchanged; a specimen sampled elsewhere is interpolated onto those rows.
+        A fit to the mean of F over these rows is then least squares on every measured row
+        of every specimen (the objectives of the tensile and ROM stages)."""
+        first = next(iter(self.samples.values()))["displacement_mm"]
+        u = first[(first >= 0.0) & (first <= self.grid[-1] * (1.0 + 1e-12))]
+        if u.size < 2:
+            raise ValueError(f"{self.test_id}: fewer than two measured rows in 0..{self.grid[-1]} mm")
+        F = np.array([s["force_N"][(s["displacement_mm"] >= 0.0)
+                                   & (s["displacement_mm"] <= u[-1])]
+                      if _same_rows(s["displacement_mm"], u) else
+                      np.interp(u, s["displacement_mm"], s["force_N"])
+                      for s in self.samples.values()])
+        return u, F
+
     def standard_error(self) -> np.ndarray:
         """Standard error of the mean curve on ``grid``: the replicates' sample standard
         deviation over sqrt(n) (zero for a single replicate)."""
@@ -82,6 +102,12 @@ class Prepared:
         if F.shape[0] < 2:
             return np.zeros_like(self.grid)
         return F.std(axis=0, ddof=1) / np.sqrt(F.shape[0])
+
+
+def _same_rows(displacement: np.ndarray, u: np.ndarray) -> bool:
+    """Whether a specimen's displacement samples inside 0..u[-1] are exactly the rows ``u``."""
+    inside = displacement[(displacement >= 0.0) & (displacement <= u[-1])]
+    return inside.shape == u.shape and bool(np.array_equal(inside, u))
 
 
 def read_prepared(path: Path) -> Prepared:

@@ -22,10 +22,11 @@ TABLE3_COLUMNS = ["case", "E", "sigma_y", "K", "n", "reference"]
 
 
 def reference_curve(path: Path, settings: dict):
-    """``(grid, force, test_id, source)`` of the curve the ROM is fitted to: the mean of a
-    prepared measured test (``.h5``, ``rom.reference: measured``) or a hi-fi virtual test's
-    ``curve.csv`` resampled to the same uniform grid (``rom.reference: hifi``); ``source``
-    is the prepared test or the hi-fi curve."""
+    """``(u, forces, test_id, source)`` of the curve the ROM is fitted to: every measured row
+    of a prepared test (``.h5``, ``rom.reference: measured``; forces n_specimens x n_rows,
+    fitted through their mean) or a hi-fi virtual test's ``curve.csv`` resampled to a
+    uniform grid (``rom.reference: hifi``; forces 1 x n); ``source`` is the prepared test
+    or the hi-fi curve."""
     path = Path(path)
     kind = "hifi" if path.suffix == ".csv" else "measured"
     if kind != settings["reference"]:
@@ -34,24 +35,28 @@ def reference_curve(path: Path, settings: dict):
         from harnesspipe.stages.hifi_chain import resample
         curve = pd.read_csv(path)
         grid, F = resample(curve, settings["three_point"]["deflection"])
-        return grid, F, f"hifi:{path.parent.name}", curve
+        return grid, np.asarray(F, dtype=float)[None, :], f"hifi:{path.parent.name}", curve
     ref = read_prepared(path)
-    return ref.grid, ref.mean, ref.test_id, ref
+    u, F = ref.rows()
+    return u, F, ref.test_id, ref
 
 
 def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
-    """Calibrate one case; write fit.json, curve.csv, trace.h5, shapes (CSV, VTU) and fit.png."""
+    """Calibrate one case; write fit.json, curve.csv, trace.h5, shapes (CSV, VTU) and fit.png.
+    fit.json holds, besides the parameters, their uncertainty
+    (:func:`harnesspipe.calibrate.rom.fit_uncertainty`) and ``rows``, the rows fitted."""
     outdir = Path(outdir)
-    grid, F_ref, test_id, source = reference_curve(reference, settings)
+    u, forces, test_id, source = reference_curve(reference, settings)
+    F_ref = forces.mean(axis=0)
     t0 = time.perf_counter()
-    result = rom_fit.fit(grid, F_ref, settings, log_path=outdir / "trace.h5")
+    result = rom_fit.fit(u, F_ref, settings, log_path=outdir / "trace.h5")
     wall_s = time.perf_counter() - t0
-    replicates = source.replicates() if settings["reference"] == "measured" else None
-    se, se_dof = rom_fit.standard_errors(grid, F_ref, result.parameters, settings, replicates)
+    replicates = forces if settings["reference"] == "measured" else None
+    uncertainty = rom_fit.fit_uncertainty(u, replicates, result.parameters, settings)
     curve, shapes = rom_fit.simulate(result.parameters, settings, return_shapes=True)
     curve = curve.rename(columns={"deflection_mm": "displacement_mm"})
     write_shapes(outdir, shapes)
-    F_fit = np.interp(grid, curve["displacement_mm"], curve["force_N"])
+    F_fit = np.interp(u, curve["displacement_mm"], curve["force_N"])
     path = write_fit(outdir, stage="rom", item=case, test_id=test_id,
                      parameters={k: result.parameters[k] for k in ("E", "sigma_y", "K", "n")},
                      error_l2=l2_error(F_ref, F_fit), error_rel=relative_l2_error(F_ref, F_fit),
@@ -60,8 +65,7 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
                      extra={"E_eq13": result.E_eq13, "sigma_y_eq13": result.sigma_y_eq13,
                             "reference": settings["reference"],
                             "fitted": list(settings["rom"]["simplex_parameters"]),
-                            "standard_error": se,
-                            "standard_error_dof": se_dof})
+                            "rows": int(u.size), **uncertainty})
     title = f"{case}: ROM at fitted properties"
     if settings["reference"] == "hifi":
         fig = plots.hifi_rom_figure(source, curve, title=title, label="hi-fi virtual test")

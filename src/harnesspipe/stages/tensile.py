@@ -1,7 +1,9 @@
 """Stage 2, component tensile fits (Sec. 3.2): Table 2.
 
 Closed and open tubes: Nelder-Mead on (E, sigma_Y, K, n) of the tube model.
-Fabric: eq. 3 for (E, sigma_Y) on the linear region, then Nelder-Mead on (K, n).
+Fabric: eq. 3 for (E, sigma_Y) on the linear region as the start, then Nelder-Mead
+on all four (:func:`harnesspipe.calibrate.tensile.calibrate_fabric`).  Every objective
+reads every measured row (the model interpolated onto them).
 The measured crosshead travel is mapped to the model's displacement (half of it
 for the tubes' symmetric half model, Sec. 3.2).
 """
@@ -15,7 +17,7 @@ import pandas as pd
 
 from harnesspipe.calibrate import tensile as tcal
 from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
-from harnesspipe.calibrate.uncertainty import error_dof, fit_standard_errors
+from harnesspipe.calibrate.uncertainty import fit_summary
 from harnesspipe.models import tensile as tmodel
 from harnesspipe.report import plots
 from harnesspipe.stages.common import read_fit, write_csv, write_fit
@@ -25,14 +27,18 @@ TABLE2_COLUMNS = ["component", "E", "sigma_y", "K", "n"]
 
 
 def fit_component(component: str, reference: Path, settings: dict, outdir: Path) -> dict:
-    """Calibrate one covering; write fit.json, curve.csv, trace.h5 and fit.png."""
+    """Calibrate one covering on every measured row; write fit.json, curve.csv, trace.h5
+    and fit.png.  fit.json holds, besides the parameters, their uncertainty
+    (:func:`harnesspipe.calibrate.uncertainty.fit_summary`) and ``rows``, the number of
+    measured rows fitted."""
     outdir = Path(outdir)
     ref = read_prepared(reference)
     scale = tmodel.crosshead_scale(component)
-    measured = pd.DataFrame({"displacement_mm": ref.grid / scale, "force_N": ref.mean})
+    u_rows, F_rows = ref.rows()
+    measured = pd.DataFrame({"displacement_mm": u_rows / scale, "force_N": F_rows.mean(axis=0)})
     common = {"preset": settings["preset"], "nu": settings["nu"], "xatol": settings["xatol"],
               "fatol": settings["fatol"], "maxfev": settings["maxfev"],
-              "log_path": outdir / "trace.h5"}
+              "log_path": outdir / "trace.h5", "key": objective_key(u_rows, F_rows, settings)}
     t0 = time.perf_counter()
     if component == "fabric_tube":
         params, fit = tcal.calibrate_fabric(measured, initial=settings["initial"], **common)
@@ -40,49 +46,31 @@ def fit_component(component: str, reference: Path, settings: dict, outdir: Path)
         geometry = {"elongation": float(measured["displacement_mm"].max())}
     else:
         params, fit = tcal.calibrate_tube(component, measured, initial=settings["initial"],
-                                          pitch=settings["pitch"],
-                                          key=objective_key(ref.grid, ref.mean, settings), **common)
+                                          pitch=settings["pitch"], **common)
         extra = {}
         geometry = {"pitch": settings["pitch"]}
+    wall_s = time.perf_counter() - t0
 
     def simulate(p: dict) -> pd.DataFrame:
         sim = tmodel.simulate(component, p["E"], p["sigma_y"], p["K"], p["n"], settings["nu"],
                               preset=settings["preset"], **geometry)
         return pd.DataFrame({"displacement_mm": scale * sim["displacement_mm"], "force_N": sim["force_N"]})
 
-    def on_grid(p: dict) -> np.ndarray:
+    def on_rows(p: dict) -> np.ndarray:
         c = simulate(p)
-        return np.interp(ref.grid, c["displacement_mm"], c["force_N"])
-    wall_s = time.perf_counter() - t0
-    extra.update(_standard_errors(component, on_grid, params, ref, measured["displacement_mm"]))
+        return np.interp(u_rows, c["displacement_mm"], c["force_N"])
+    extra.update(fit_summary(on_rows, params, list(TABLE2_COLUMNS[1:]), u_rows, F_rows))
+    extra["rows"] = int(u_rows.size)
     curve = simulate(params)
-    F_fit = np.interp(ref.grid, curve["displacement_mm"], curve["force_N"])
+    F_fit, F_mean = on_rows(params), F_rows.mean(axis=0)
     path = write_fit(outdir, stage="tensile", item=component, test_id=ref.test_id, parameters=params,
-                     error_l2=l2_error(ref.mean, F_fit), error_rel=relative_l2_error(ref.mean, F_fit),
+                     error_l2=l2_error(F_mean, F_fit), error_rel=relative_l2_error(F_mean, F_fit),
                      nfev=fit.nfev, converged=fit.converged, wall_s=wall_s,
                      curve=curve, extra=extra)
     plots.save(plots.fit_figure(ref, curve, title=f"{component}: tensile model at fitted values",
                                 xlabel="crosshead displacement [mm]", label="FE (fitted)"),
                outdir / "fit.png")
     return read_fit(path)
-
-
-def _standard_errors(component: str, on_grid, params: dict, ref, displacement) -> dict:
-    """``standard_error`` and ``standard_error_dof`` of a fit (fit.json): the fabric's E and
-    sigma_Y by eq. 3 on each replicate (none when a replicate has no linear region), every
-    other parameter by least squares (:func:`fit_standard_errors`)."""
-    replicates = ref.replicates()
-    fitted, closed_form = list(TABLE2_COLUMNS[1:]), {}
-    if component == "fabric_tube":
-        fitted = ["K", "n"]
-        if len(replicates) >= 2:
-            try:
-                closed_form = tcal.fabric_closed_form(displacement, replicates)
-            except ValueError:
-                return {"standard_error": None, "standard_error_dof": None}
-    return {"standard_error": fit_standard_errors(on_grid, params, fitted, ref.mean, replicates,
-                                                  closed_form),
-            "standard_error_dof": error_dof(len(ref.grid), fitted, replicates)}
 
 
 def table2(fit_paths: list[Path], out_csv: Path) -> pd.DataFrame:
