@@ -4,21 +4,11 @@ import pandas as pd
 import pytest
 
 import harnesspipe  # noqa: F401  (sets the Numba cache)
-from harnesspipe.calibrate.tensile import (
-    calibrate_fabric,
-    calibrate_tube,
-    force_error,
-    linear_region,
-)
+from harnesspipe.calibrate.tensile import (calibrate_fabric, calibrate_tube, force_error,
+                                           linear_region)
 from harnesspipe.fe.materials.hardening import flow_stress
-from harnesspipe.models.tensile import (
-    FabricGeometry,
-    TubeGeometry,
-    resolution,
-    simulate,
-    simulate_axisymmetric_tube,
-    simulate_shell_tube,
-)
+from harnesspipe.models.tensile import (FabricGeometry, TubeGeometry, resolution, simulate,
+                                        simulate_axisymmetric_tube, simulate_shell_tube)
 
 TABLE2 = {"closed_tube": (1559.0, 8.6, 25.6, 0.12), "open_tube": (698.0, 8.8, 23.1, 0.83),
           "fabric_tube": (93.5, 10.0, 30.8, 0.60)}

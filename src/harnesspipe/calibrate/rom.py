@@ -43,11 +43,7 @@ import numpy as np
 
 from harnesspipe import rom
 from harnesspipe.calibrate import eq13, uncertainty
-from harnesspipe.calibrate.hardening import (
-    flow_stresses,
-    hardening_from_three,
-    hardening_from_two,
-)
+from harnesspipe.calibrate.hardening import flow_stresses, hardening_from_three, hardening_from_two
 from harnesspipe.calibrate.objective import l2_error, objective_key
 from harnesspipe.calibrate.simplex import FitResult, nelder_mead
 

@@ -31,13 +31,8 @@ from scipy.optimize import minimize_scalar
 from harnesspipe.calibrate.hardening import flow_stresses, hardening_from_three
 from harnesspipe.calibrate.objective import l2_error
 from harnesspipe.calibrate.simplex import FitResult, nelder_mead
-from harnesspipe.models.tensile import (
-    POISSON,
-    FabricGeometry,
-    resolution,
-    simulate,
-    simulate_fabric,
-)
+from harnesspipe.models.tensile import (POISSON, FabricGeometry, resolution, simulate,
+                                        simulate_fabric)
 
 PARAMETERS = ("E", "sigma_y", "K", "n")
 INITIAL_GUESS = {
