@@ -85,7 +85,7 @@ def _interface(cfg: dict, choice: str | None) -> tuple[str, dict]:
     return interface_choice(cfg, choice)
 
 
-def _wrote(*paths: Path) -> None:
+def _wrote(*paths) -> None:
     print("wrote " + ", ".join(str(p) for p in paths))
 
 
@@ -113,7 +113,7 @@ def _three_point(args) -> int:
     print(f"{args.case}: {summary['steps']} steps, dt {summary['dt']:.3g} s, "
           f"wall {summary['wall_s']:.1f} s, KE/IE max {summary['ke_ie_max']:.3g}, "
           f"energy error {summary['energy_error']:.3g}")
-    _wrote(args.out, summary_json, outdir)
+    _wrote(args.out, summary_json, f"{outdir}/")
     return 0
 
 
@@ -131,5 +131,5 @@ def _branch(args) -> int:
     print(f"branch {summary['load_case']}: {summary['steps']} steps, dt {summary['dt']:.3g} s, "
           f"wall {summary['wall_s']:.1f} s, KE/IE max {summary['ke_ie_max']:.3g}, "
           f"energy error {summary['energy_error']:.3g}")
-    _wrote(args.out, summary_json, outdir)
+    _wrote(args.out, summary_json, f"{outdir}/")
     return 0
