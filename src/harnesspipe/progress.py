@@ -15,8 +15,10 @@ class Progress:
     """``Progress(label)(step=, time_fraction=, deflection_mm=, force_N=, stroke_mm=)``;
     :meth:`close` ends the terminal line."""
 
-    def __init__(self, label: str, stream=None, every: float = 0.05, clock=time.perf_counter):
+    def __init__(self, label: str, stream=None, every: float = 0.05, clock=time.perf_counter,
+                 travel: str = "deflection"):
         self.label, self.stream, self.every, self.clock = label, stream or sys.stderr, every, clock
+        self.travel = travel         # what the stroke is called: deflection, displacement
         self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
         self.t0 = clock()
         self.t_start = None          # wall time of the first step (after mesh and compile)
@@ -38,7 +40,7 @@ class Progress:
             self.next = float("inf")
         eta = ((now - self.t_start) * (1.0 - time_fraction) / time_fraction
                if time_fraction > 0.0 else None)
-        text = (f"{self.label}: {100.0 * fraction:3.0f} %  deflection {deflection_mm:6.2f} of "
+        text = (f"{self.label}: {100.0 * fraction:3.0f} %  {self.travel} {deflection_mm:6.2f} of "
                 f"{stroke_mm:g} mm  force {force_N:8.3f} N  step {step}  elapsed "
                 f"{now - self.t0:.0f} s  ETA {'?' if eta is None else f'{eta:.0f} s'}")
         if self.tty:

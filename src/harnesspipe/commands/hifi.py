@@ -118,6 +118,7 @@ def _three_point(args) -> int:
 
 
 def _branch(args) -> int:
+    from harnesspipe.progress import Progress
     from harnesspipe.stages.branch_hifi import run, settings_from_config
 
     cfg = _config(args)
@@ -126,8 +127,13 @@ def _branch(args) -> int:
         raise InputError(f"--t-total {args.t_total}: expected a positive time")
     outdir = args.outdir or args.out.parent / f"{args.out.stem}_files"
     summary_json = args.summary or outdir / "summary.json"
-    summary = run(settings_from_config(cfg, args.load_case, args.t_total), outdir,
-                  table2=args.coverings, curve_csv=args.out, summary_json=summary_json)
+    settings = settings_from_config(cfg, args.load_case, args.t_total)
+    progress = Progress(f"branch {settings['load_case']}", travel="displacement")
+    try:
+        summary = run(settings, outdir, table2=args.coverings, curve_csv=args.out,
+                      summary_json=summary_json, progress=progress)
+    finally:
+        progress.close()
     print(f"branch {summary['load_case']}: {summary['steps']} steps, dt {summary['dt']:.3g} s, "
           f"wall {summary['wall_s']:.1f} s, KE/IE max {summary['ke_ie_max']:.3g}, "
           f"energy error {summary['energy_error']:.3g}")
