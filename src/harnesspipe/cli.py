@@ -1,8 +1,10 @@
-"""Console command ``harnesspipe`` (DESIGN sec. 5).
+"""Calibrate and run FE models of automotive wire harnesses: test data, reduced-order and
+high-fidelity bending models, the pipeline's stages.
 
-Exit codes: 0 success, 2 bad input (config, data, option), 3 a simulation or
-calibration that failed (convergence, instability).  Errors are one line on
-stderr naming what and where.
+The console command ``harnesspipe`` (DESIGN sec. 5).  Exit codes: 0 success, 2 bad input
+(config, data, option), 3 a simulation or calibration that failed (convergence,
+instability), 130 interrupted (Ctrl-C).  Errors are one line on stderr naming what and
+where.
 """
 from __future__ import annotations
 
@@ -28,7 +30,11 @@ class InputError(ValueError):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="harnesspipe", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="harnesspipe", description=__doc__.split("\n\n")[0].replace("\n", " "),
+        epilog="Exit codes: 0 success, 2 bad input (naming the file, key or option), 3 a failed "
+               "simulation or calibration, 130 interrupted.  Help of a command: harnesspipe "
+               "COMMAND --help.")
     parser.add_argument("--version", action="version", version=f"harnesspipe {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMAND_MODULES:
@@ -53,3 +59,6 @@ def main(argv: list[str] | None = None) -> int:
     except (RuntimeError, FloatingPointError) as exc:
         print(f"harnesspipe: failed: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 3
+    except KeyboardInterrupt:       # every result file is written atomically: none half-written
+        print("\nharnesspipe: interrupted", file=sys.stderr)
+        return 130

@@ -11,6 +11,8 @@ from pathlib import Path
 import yaml
 from jsonschema import Draft202012Validator
 
+from harnesspipe.validate import deflection_problem, interface_problem, problem
+
 REPO_ROOT = Path(__file__).resolve().parents[2]
 SCHEMA_PATH = REPO_ROOT / "workflow" / "schemas" / "config.schema.yaml"
 DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
@@ -61,7 +63,44 @@ def validate(config: dict, source: str = "config") -> dict:
     return config
 
 
+#: config sections whose values are physical inputs (checked by harnesspipe.validate)
+PHYSICAL = ("materials", "coverings", "interfaces", "hifi.parameters", "hifi.build", "paper.table2",
+            "paper.table3", "paper.interface")
+
+
+def _leaves(tree, prefix: str):
+    """(dotted key, value) of every number under ``tree``."""
+    if isinstance(tree, dict):
+        for k, v in tree.items():
+            yield from _leaves(v, f"{prefix}.{k}")
+    elif isinstance(tree, (int, float)) and not isinstance(tree, bool):
+        yield prefix, tree
+
+
+def _check_physical(cfg: dict, source: str) -> None:
+    """Signs and ranges of the physical inputs, and the cohesive law's delta_f > delta0."""
+    sections = [*PHYSICAL, *(f"profiles.{name}.hifi" for name in cfg["profiles"])]
+    for section in sections:
+        tree = cfg
+        for part in section.split("."):
+            tree = tree[part]
+        for key, value in _leaves(tree, section):
+            bad = problem(key, value)
+            if bad:
+                raise ConfigError(f"{source}: {key}: {value!r}: {bad}")
+    for section in ("hifi.parameters", "paper.interface"):
+        group, name = section.split(".")
+        bad = interface_problem(cfg[group][name])
+        if bad:
+            raise ConfigError(f"{source}: {section}.{bad}")
+    tp = cfg["three_point"]
+    bad = deflection_problem(tp["deflection"], tp["span"])
+    if bad:
+        raise ConfigError(f"{source}: three_point.deflection: {tp['deflection']!r}: {bad}")
+
+
 def _check_semantics(cfg: dict, source: str) -> None:
+    _check_physical(cfg, source)
     if cfg["profile"] not in cfg["profiles"]:
         raise ConfigError(f"{source}: profile: {cfg['profile']!r} is not one of "
                           f"{sorted(cfg['profiles'])} (defined under profiles)")
@@ -90,13 +129,29 @@ def load(path: str | Path = DEFAULT_CONFIG, overrides: dict | None = None) -> di
     path = Path(path)
     if not path.exists():
         raise ConfigError(f"{path}: config file not found")
-    with open(path) as f:
-        cfg = yaml.safe_load(f)
+    cfg = read_yaml(path)
     if not isinstance(cfg, dict):
         raise ConfigError(f"{path}: expected a mapping at the top level")
     if overrides:
         cfg = merge(cfg, overrides)
     return validate(cfg, source=str(path))
+
+
+def yaml_problem(path, exc: yaml.YAMLError) -> str:
+    """One line for a YAML syntax error: the file, line and column, and what is wrong."""
+    mark = getattr(exc, "problem_mark", None)
+    where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
+    what = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    return f"{path}: {where}not valid YAML: {what}"
+
+
+def read_yaml(path: Path):
+    """A YAML file's content; a syntax error raises ConfigError naming the file and line."""
+    try:
+        with open(path) as f:
+            return yaml.safe_load(f)
+    except yaml.YAMLError as exc:
+        raise ConfigError(yaml_problem(path, exc)) from None
 
 
 def merge(base: dict, extra: dict) -> dict:

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+#: the calibrated interface the pipeline writes (hifi_interface rule), relative to the cwd
+CALIBRATED = Path("results/hifi/interface.csv")
+
 
 def _assignment(text: str) -> tuple[str, str]:
     import argparse
@@ -22,14 +25,21 @@ def register(sub) -> None:
     p.add_argument("--config", type=Path, default=None, help="config file (default: the package's)")
     p.add_argument("--coverings", type=Path, default=None,
                    help="table2.csv of the tensile stage (default: config hifi.coverings)")
+    p.add_argument("--interface", default=None, metavar="paper|start|FILE",
+                   help="interface values of the run: paper (Sec. 4.2: mu_rtb 0.3, mu_rtp 0.1, "
+                        "delta0 0.03, delta_f 0.08, alpha_d 2, E2/E1 0.6), start (config "
+                        "hifi.parameters, the calibration's start values) or an interface.csv "
+                        f"(parameter,value); default: {CALIBRATED} when it exists, else paper")
     p.add_argument("--set", dest="overrides", type=_assignment, action="append", default=[],
-                   metavar="KEY=VALUE", help="override a parameter, e.g. mu_rtb=0.25 (repeatable)")
+                   metavar="KEY=VALUE",
+                   help="override one value on top of --interface, e.g. mu_rtb=0.25 (repeatable)")
     p.add_argument("--out", type=Path, required=True, help="CSV: deflection_mm,force_N")
-    p.add_argument("--summary", type=Path, required=True, help="summary JSON")
+    p.add_argument("--summary", type=Path, default=None,
+                   help="summary JSON (default: summary.json in the --outdir folder)")
     p.add_argument("--threads", type=int, default=None,
                    help="Numba threads (default: all cores; Snakemake passes its `threads`)")
     p.add_argument("--outdir", type=Path, default=None,
-                   help="folder for energies, slip-out, shapes (default: beside --out)")
+                   help="folder for energies, slip-out, shapes (default: OUT_files beside --out)")
     p.set_defaults(func=_three_point)
 
     p = hsub.add_parser("branch", help="explicit pull test of the Y-shaped branching harness (Fig. 18a)")
@@ -43,9 +53,10 @@ def register(sub) -> None:
                    help="table2.csv of the tensile stage (default: config hifi.coverings)")
     p.add_argument("--threads", type=int, default=None, help="Numba threads (default: all cores)")
     p.add_argument("--out", type=Path, required=True, help="CSV: displacement_mm,force_N")
-    p.add_argument("--summary", type=Path, required=True, help="summary JSON")
+    p.add_argument("--summary", type=Path, default=None,
+                   help="summary JSON (default: summary.json in the --outdir folder)")
     p.add_argument("--outdir", type=Path, default=None,
-                   help="folder for energies and S2's bent shapes (default: beside --out)")
+                   help="folder for energies and S2's bent shapes (default: OUT_files beside --out)")
     p.set_defaults(func=_branch)
 
 
@@ -66,20 +77,48 @@ def _config(args) -> dict:
     return cfg
 
 
+def _interface(cfg: dict, choice: str | None) -> tuple[str, dict]:
+    """The run's interface (``--interface``, default: the calibrated one, else the paper's)."""
+    from harnesspipe.stages.hifi import interface_choice
+    if choice is None:
+        choice = str(CALIBRATED) if CALIBRATED.is_file() else "paper"
+    return interface_choice(cfg, choice)
+
+
+def _wrote(*paths) -> None:
+    print("wrote " + ", ".join(str(p) for p in paths))
+
+
 def _three_point(args) -> int:
-    from harnesspipe.stages.hifi import run_case
+    from harnesspipe.progress import Progress
+    from harnesspipe.stages.hifi import parameters, run_case
 
     cfg = _config(args)
+    label, interface = _interface(cfg, args.interface)
+    overrides = dict(args.overrides)
+    used = parameters(cfg, overrides, args.coverings, interface)      # every input checked here
+    shown = {k: used["interface"][k] for k in cfg["paper"]["interface"]}
+    shown.update((k, used["build"][k]) for k in interface if k in used["build"])
+    print(f"interface: {label}: " + ", ".join(
+        f"{k} {v:g}" + (" (--set)" if k in overrides else "") for k, v in shown.items()), flush=True)
     outdir = args.outdir or args.out.parent / f"{args.out.stem}_files"
-    summary = run_case(cfg, args.case, dict(args.overrides), coverings=args.coverings,
-                       out_csv=args.out, summary_json=args.summary, outdir=outdir)
+    summary_json = args.summary or outdir / "summary.json"
+    progress = Progress(args.case)
+    try:
+        summary = run_case(cfg, args.case, overrides, coverings=args.coverings, out_csv=args.out,
+                           summary_json=summary_json, outdir=outdir, interface=interface,
+                           interface_source=label, progress=progress)
+    finally:
+        progress.close()
     print(f"{args.case}: {summary['steps']} steps, dt {summary['dt']:.3g} s, "
           f"wall {summary['wall_s']:.1f} s, KE/IE max {summary['ke_ie_max']:.3g}, "
           f"energy error {summary['energy_error']:.3g}")
+    _wrote(args.out, summary_json, f"{outdir}/")
     return 0
 
 
 def _branch(args) -> int:
+    from harnesspipe.progress import Progress
     from harnesspipe.stages.branch_hifi import run, settings_from_config
 
     cfg = _config(args)
@@ -87,9 +126,16 @@ def _branch(args) -> int:
         from harnesspipe.cli import InputError
         raise InputError(f"--t-total {args.t_total}: expected a positive time")
     outdir = args.outdir or args.out.parent / f"{args.out.stem}_files"
-    summary = run(settings_from_config(cfg, args.load_case, args.t_total), outdir,
-                  table2=args.coverings, curve_csv=args.out, summary_json=args.summary)
+    summary_json = args.summary or outdir / "summary.json"
+    settings = settings_from_config(cfg, args.load_case, args.t_total)
+    progress = Progress(f"branch {settings['load_case']}", travel="displacement")
+    try:
+        summary = run(settings, outdir, table2=args.coverings, curve_csv=args.out,
+                      summary_json=summary_json, progress=progress)
+    finally:
+        progress.close()
     print(f"branch {summary['load_case']}: {summary['steps']} steps, dt {summary['dt']:.3g} s, "
           f"wall {summary['wall_s']:.1f} s, KE/IE max {summary['ke_ie_max']:.3g}, "
           f"energy error {summary['energy_error']:.3g}")
+    _wrote(args.out, summary_json, f"{outdir}/")
     return 0

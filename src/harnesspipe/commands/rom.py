@@ -25,35 +25,62 @@ def _nonneg(text: str) -> float:
     return _number(text, strict=False)
 
 
+def _physical(key: str):
+    """An argparse type: a number the physical-input validator accepts for ``key``."""
+    def parse(text: str) -> float:
+        import argparse
+
+        from harnesspipe.validate import problem
+        bad = problem(key, text)
+        if bad:
+            raise argparse.ArgumentTypeError(f"{text!r}: {bad}")
+        return float(text)
+    parse.__name__ = key          # argparse names the type in its messages
+    return parse
+
+
+def _material(p, *, what: str) -> None:
+    """--E, --sigma-y, --K, --n: the effective beam's eq. 2 law."""
+    p.add_argument("--E", type=_physical("E"), required=True, help=f"{what} [MPa]")
+    p.add_argument("--sigma-y", type=_physical("sigma_y"),
+                   help="yield stress [MPa] (required unless --elastic)")
+    p.add_argument("--K", type=_physical("K"),
+                   help="hardening coefficient of eq. 2, >= 0 [MPa] (required unless --elastic)")
+    p.add_argument("--n", type=_physical("n"),
+                   help="hardening exponent of eq. 2, in (0, 1] (required unless --elastic)")
+
+
 def register(sub) -> None:
     rom = sub.add_parser("rom", help="reduced-order beam models")
     rsub = rom.add_subparsers(dest="rom_command", required=True, metavar="MODEL")
 
     p = rsub.add_parser("three-point", help="three-point bending of an effective beam")
-    p.add_argument("--E", type=_positive, required=True, help="effective modulus E_eff [MPa]")
-    p.add_argument("--sigma-y", type=_positive, help="yield stress [MPa] (required unless --elastic)")
-    p.add_argument("--K", type=_nonneg, help="hardening coefficient of eq. 2 [MPa]")
-    p.add_argument("--n", type=_positive, help="hardening exponent of eq. 2")
+    _material(p, what="effective modulus E_eff")
     p.add_argument("--radius", type=_positive, required=True, help="outer radius r_o [mm]")
-    p.add_argument("--span", type=_positive, default=127.0)
-    p.add_argument("--overhang", type=_nonneg, default=36.5)
-    p.add_argument("--deflection", type=_positive, default=30.0)
-    p.add_argument("--supports", choices=("rollers", "pinned"), default="rollers")
-    p.add_argument("--elements", type=int, default=None, help="beam elements (default: model's)")
+    p.add_argument("--span", type=_positive, default=127.0,
+                   help="distance between the supports [mm] (default: %(default)g)")
+    p.add_argument("--overhang", type=_nonneg, default=36.5,
+                   help="sample length beyond each support, rollers only [mm] (default: %(default)g)")
+    p.add_argument("--deflection", type=_positive, default=30.0,
+                   help="stroke of the loading pin, below span / 2 [mm] (default: %(default)g)")
+    p.add_argument("--supports", choices=("rollers", "pinned"), default="rollers",
+                   help="rollers: 5 mm cylinders in contact; pinned: ideal supports at the span "
+                        "ends, no overhang (default: %(default)s)")
+    p.add_argument("--elements", type=int, default=None,
+                   help="beam elements, even (default: the model's, 40)")
     p.add_argument("--elastic", action="store_true", help="ignore plasticity")
     p.add_argument("--out", type=Path, required=True, help="CSV: deflection_mm,force_N")
     p.set_defaults(func=_three_point)
 
     p = rsub.add_parser("cantilever", help="cantilever under a tip dead load")
-    p.add_argument("--E", type=_positive, required=True)
-    p.add_argument("--radius", type=_positive, required=True)
-    p.add_argument("--length", type=_positive, required=True)
-    p.add_argument("--tip-load", type=_positive, required=True, help="final tip load P [N]")
-    p.add_argument("--sigma-y", type=_positive)
-    p.add_argument("--K", type=_nonneg)
-    p.add_argument("--n", type=_positive)
-    p.add_argument("--elements", type=int, default=None)
-    p.add_argument("--elastic", action="store_true")
+    _material(p, what="modulus E")
+    p.add_argument("--radius", type=_positive, required=True, help="radius of the section [mm]")
+    p.add_argument("--length", type=_positive, required=True, help="free length [mm]")
+    p.add_argument("--tip-load", type=_positive, required=True,
+                   help="final tip dead load P, across the undeformed axis [N]")
+    p.add_argument("--elements", type=int, default=None,
+                   help="beam elements (default: the model's, 20)")
+    p.add_argument("--elastic", action="store_true", help="ignore plasticity")
     p.add_argument("--out", type=Path, required=True,
                    help="CSV: load_N,tip_ux_mm,tip_uy_mm,tip_rotation_rad")
     p.set_defaults(func=_cantilever)
@@ -95,7 +122,11 @@ def _write(frame, out: Path) -> int:
 def _three_point(args) -> int:
     from harnesspipe import rom
     from harnesspipe.cli import InputError
+    from harnesspipe.validate import deflection_problem
     plastic, mesh = _plastic_args(args), _mesh(args)
+    bad = deflection_problem(args.deflection, args.span)
+    if bad:
+        raise InputError(f"rom three-point: --deflection {args.deflection:g}: {bad}")
     try:
         frame = rom.three_point(E=args.E, radius=args.radius, supports=args.supports, span=args.span,
                                 overhang=args.overhang, deflection=args.deflection,

@@ -20,7 +20,8 @@ import numpy as np
 import yaml
 from jsonschema import Draft202012Validator
 
-from harnesspipe.config import REPO_ROOT
+from harnesspipe.config import REPO_ROOT, yaml_problem
+from harnesspipe.validate import force_sign_problem
 
 MANIFEST = "manifest.yaml"
 MANIFEST_SCHEMA = REPO_ROOT / "workflow" / "schemas" / "manifest.schema.yaml"
@@ -71,7 +72,7 @@ def read_manifest(data_dir: Path) -> dict:
         with open(path) as f:
             manifest = yaml.safe_load(f)
     except yaml.YAMLError as exc:
-        raise DataError([f"{path}: not valid YAML: {exc}".splitlines()[0]]) from None
+        raise DataError([yaml_problem(path, exc)]) from None
     with open(MANIFEST_SCHEMA) as f:
         validator = Draft202012Validator(yaml.safe_load(f))
     problems = [f"{path}: {'.'.join(map(str, e.absolute_path)) or '(top level)'}: {e.message}"
@@ -140,6 +141,10 @@ def _check_curve(path: Path, t: dict, entry: dict, problems) -> bool:
     if np.max(np.abs(F)) < KILONEWTON_RATIO * proto["load_cell_N"]:
         problems.append(f"{path}: force_N peaks at {np.max(np.abs(F)):g} with a "
                         f"{proto['load_cell_N']:g} N load cell: values look like kN, expected N")
+        ok = False
+    sign = force_sign_problem(F)
+    if sign:
+        problems.append(f"{path}: {sign}")
         ok = False
     if np.max(np.abs(F)) > proto["load_cell_N"]:
         problems.append(f"{path}: force_N reaches {np.max(np.abs(F)):g}, beyond the "

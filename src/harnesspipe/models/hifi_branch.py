@@ -365,10 +365,11 @@ class YRun:
 
 
 def pull(inp: HifiInputs, geometry: Geometry, load_case: str, stroke: float = 50.0,
-         n_shapes: int = 5, bridge: float = 15.0, reject: bool = True) -> YRun:
+         n_shapes: int = 5, bridge: float = 15.0, reject: bool = True, progress=None) -> YRun:
     """Run the hi-fi pull test; raises ExplicitError when the run goes unstable or, with
     ``reject``, is not quasi-static (``config.explicit.ke_ie_fail``) or its energy balance
-    fails."""
+    fails.  ``progress``: as in :func:`harnesspipe.models.hifi.three_point` (the force is the
+    strand's tension, the deflection the crosshead's travel)."""
     from harnesspipe.fe.solvers.central_difference import ExplicitError
     t0 = time.perf_counter()
     if load_case not in LOAD_CASES:
@@ -383,6 +384,9 @@ def pull(inp: HifiInputs, geometry: Geometry, load_case: str, stroke: float = 50
         while state["next"] < marks.size and t >= marks[state["next"]] * system.T - 1e-12:
             shapes[round(system.displacement(), 6)] = system.x[mesh.s2_wire].copy()
             state["next"] += 1
+        if progress is not None:
+            progress(step=step, time_fraction=t / system.T, deflection_mm=system.displacement(),
+                     force_N=system.tension(), stroke_mm=stroke)
 
     res = integrate(system, system.T, settings, on_output=on_output)
     hist = res.history

@@ -47,13 +47,14 @@ def inputs(settings: dict, table2: Path | None):
 
 
 def run(settings: dict, outdir: Path, table2: Path | None = None, curve_csv: Path | None = None,
-        summary_json: Path | None = None) -> dict:
+        summary_json: Path | None = None, progress=None) -> dict:
     """Run the hi-fi pull test and write its artefacts under ``outdir`` (curve and summary
-    there unless ``curve_csv`` / ``summary_json`` are given); returns the summary."""
+    there unless ``curve_csv`` / ``summary_json`` are given); returns the summary.
+    ``progress``: the model's progress callback (:func:`harnesspipe.models.hifi_branch.pull`)."""
     from harnesspipe.models.hifi_branch import pull
     inp = inputs(settings, table2)
     res = pull(inp, Geometry(**settings["geometry"]), settings["load_case"],
-               stroke=float(settings["stroke"]))
+               stroke=float(settings["stroke"]), progress=progress)
     outdir = Path(outdir)
     write_csv(outdir / "energies.csv", res.history)
     shapes = res.shapes

@@ -14,6 +14,7 @@ from pathlib import Path
 import pandas as pd
 
 from harnesspipe.config import ConfigError
+from harnesspipe.validate import check, interface_problem, problem
 
 #: keys of ``--set`` and their place: interface/explicit parameters, resolution, coverings
 INTERFACE_KEYS = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1", "mu_s",
@@ -39,27 +40,26 @@ def covering_properties(cfg: dict, table2: Path | None) -> dict:
         if source != "paper":
             raise ConfigError(f"hifi.coverings: {source!r}: expected 'paper' or pass --coverings")
         return {k: dict(v) for k, v in cfg["paper"]["table2"].items()}
-    frame = pd.read_csv(table2)
+    frame = pd.read_csv(table2, dtype=str)       # values as written, for the messages
     missing = {"component", "E", "sigma_y", "K", "n"} - set(frame.columns)
     if missing:
         raise ConfigError(f"{table2}: missing columns {sorted(missing)}")
-    return {row.component: {k: float(getattr(row, k)) for k in ("E", "sigma_y", "K", "n")}
-            for row in frame.itertuples()}
+    out = {}
+    for line, row in enumerate(frame.itertuples(), start=2):
+        values = {k: getattr(row, k) for k in ("E", "sigma_y", "K", "n")}
+        bad = check(values, f"{table2}: line {line}: {row.component}.")
+        if bad:
+            raise ConfigError(bad[0])
+        out[row.component] = {k: float(v) for k, v in values.items()}
+    return out
 
 
-def _build_value(key: str, value: float):
-    """A build-state value of ``--set``, checked as the config schema checks it."""
-    if key == "end_tape_layers":
-        if not 1.0 <= value <= 10.0:
-            raise ConfigError(f"--set end_tape_layers={value:g}: expected a number of wraps, 1..10")
-        return value
-    if not 0.0 <= value <= 1.0:
-        raise ConfigError(f"--set {key}={value:g}: expected a fraction in [0, 1]")
-    return value
-
-
-def parameters(cfg: dict, overrides: dict, table2: Path | None = None) -> dict:
-    """Everything a run needs, as plain values: interface, explicit, resolution, coverings."""
+def parameters(cfg: dict, overrides: dict, table2: Path | None = None,
+               interface: dict | None = None) -> dict:
+    """Everything a run needs, as plain values: interface, explicit, resolution, coverings,
+    build.  ``interface`` (e.g. from :func:`interface_choice`) replaces the config's start
+    values (``hifi.parameters``; its build-state keys the config's ``hifi.build``); the
+    ``--set`` ``overrides`` come last.  Bad values raise ConfigError naming the key."""
     from harnesspipe.config import resolution
     p = {
         "interface": {**cfg["interfaces"], **cfg["hifi"]["parameters"]},
@@ -68,11 +68,16 @@ def parameters(cfg: dict, overrides: dict, table2: Path | None = None) -> dict:
         "coverings": covering_properties(cfg, table2),
         "build": dict(cfg["hifi"]["build"]),
     }
+    for key, value in (interface or {}).items():
+        p["build" if key in BUILD_KEYS else "interface"][key] = float(value)
     for key, text in overrides.items():
         try:
             value = float(text)
         except ValueError:
             raise ConfigError(f"--set {key}={text}: not a number") from None
+        bad = problem(key, value)
+        if bad:
+            raise ConfigError(f"--set {key}={text}: {bad}")
         group, _, name = key.rpartition(".")
         if group in COVERINGS and name in ("E", "sigma_y", "K", "n"):
             p["coverings"][group][name] = value
@@ -81,21 +86,55 @@ def parameters(cfg: dict, overrides: dict, table2: Path | None = None) -> dict:
         elif key in EXPLICIT_KEYS:
             p["explicit"][key] = value
         elif key in BUILD_KEYS:
-            p["build"][key] = _build_value(key, value)
+            p["build"][key] = value
         elif key in p["resolution"]:
             p["resolution"][key] = int(value) if float(value).is_integer() else value
         else:
-            allowed = (list(INTERFACE_KEYS) + list(EXPLICIT_KEYS) + list(BUILD_KEYS)
-                       + sorted(p["resolution"])
-                       + [f"{c}.E|sigma_y|K|n" for c in COVERINGS])
+            allowed = dict.fromkeys([*INTERFACE_KEYS, *EXPLICIT_KEYS, *BUILD_KEYS,
+                                     *sorted(p["resolution"]),
+                                     *(f"{c}.E|sigma_y|K|n" for c in COVERINGS)])
             raise ConfigError(f"--set {key}: unknown parameter (one of {', '.join(allowed)})")
+    relation = interface_problem(p["interface"])
+    if relation and (interface or overrides.keys() & {"delta0", "delta_f"}):
+        source = "--set " if overrides.keys() & {"delta0", "delta_f"} else "interface: "
+        raise ConfigError(source + relation)
     return p
 
 
-def inputs(cfg: dict, case: str, overrides: dict, table2: Path | None = None):
-    """The :class:`harnesspipe.models.hifi_bundle.HifiInputs` of one run from the config."""
+def interface_choice(cfg: dict, choice: str | Path) -> tuple[str, dict]:
+    """The interface a run starts from, and its label: ``"paper"`` (config ``paper.interface``,
+    Sec. 4.2), ``"start"`` (config ``hifi.parameters``, the calibration's start values) or an
+    interface.csv (``parameter,value`` as the pipeline's hifi_interface rule writes it; its
+    build-state rows, e.g. ``end_tape_layers``, set the specimen's build)."""
+    if str(choice) in ("paper", "start"):
+        values = cfg["paper"]["interface"] if str(choice) == "paper" else cfg["hifi"]["parameters"]
+        label = ("paper (Sec. 4.2, config paper.interface)" if str(choice) == "paper"
+                 else "start (config hifi.parameters)")
+        return label, {k: float(v) for k, v in values.items()}
+    path = Path(choice)
+    if not path.is_file():
+        raise ConfigError(f"--interface {choice}: expected paper, start or an interface.csv file")
+    frame = pd.read_csv(path, dtype=str)
+    if list(frame.columns[:2]) != ["parameter", "value"]:
+        raise ConfigError(f"{path}: line 1: expected the columns parameter,value")
+    values = {}
+    for line, row in enumerate(frame.itertuples(), start=2):
+        if row.parameter not in INTERFACE_KEYS + BUILD_KEYS:
+            raise ConfigError(f"{path}: line {line}: {row.parameter!r}: not an interface or build "
+                              f"parameter (one of {', '.join(INTERFACE_KEYS + BUILD_KEYS)})")
+        bad = problem(row.parameter, row.value)
+        if bad:
+            raise ConfigError(f"{path}: line {line}: {row.parameter}={row.value}: {bad}")
+        values[row.parameter] = float(row.value)
+    return str(path), values
+
+
+def inputs(cfg: dict, case: str, overrides: dict, table2: Path | None = None,
+           interface: dict | None = None):
+    """The :class:`harnesspipe.models.hifi_bundle.HifiInputs` of one run from the config
+    (``interface``, ``overrides``: see :func:`parameters`)."""
     from harnesspipe.models.hifi_bundle import HifiInputs
-    p = parameters(cfg, overrides, table2)
+    p = parameters(cfg, overrides, table2, interface)
     res = p["resolution"]
     definition = case_definition(cfg, case)
     t_total = p["explicit"].get("t_total", res["t_total"] * definition.get("t_total_scale", 1.0))
@@ -106,19 +145,23 @@ def inputs(cfg: dict, case: str, overrides: dict, table2: Path | None = None):
 
 
 def run_case(cfg: dict, case: str, overrides: dict, *, coverings: Path | None, out_csv: Path,
-             summary_json: Path, outdir: Path) -> dict:
-    """Run one virtual test and write its artefacts; returns the summary."""
+             summary_json: Path, outdir: Path, interface: dict | None = None,
+             interface_source: str = "config hifi.parameters", progress=None) -> dict:
+    """Run one virtual test and write its artefacts; returns the summary.  ``progress``: the
+    model's progress callback (:func:`harnesspipe.models.hifi.three_point`)."""
     from harnesspipe.models.hifi import three_point
     from harnesspipe.stages.common import write_csv, write_json
-    inp = inputs(cfg, case, overrides, coverings)
-    run = three_point(inp)
+    inp = inputs(cfg, case, overrides, coverings, interface)
+    run = three_point(inp, progress=progress)
     outdir = Path(outdir)
     write_csv(outdir / "energies.csv", run.history)
     write_csv(outdir / "slip_out.csv", run.slip_out)
     write_shapes(outdir, run)
     summary = {"case": case, "profile": cfg["profile"], **run.summary,
+               "interface_source": interface_source,
                "parameters": {"interface": inp.interface, "explicit": inp.explicit,
-                              "resolution": inp.resolution, "coverings": inp.coverings}}
+                              "resolution": inp.resolution, "coverings": inp.coverings,
+                              "build": inp.config["hifi"]["build"]}}
     write_csv(out_csv, run.curve)
     write_json(summary_json, summary)
     return summary
