@@ -425,6 +425,32 @@ def _cost_table(cost: _HifiCost, paper_cost: dict) -> str:
             + _table(["item", "hi-fi runs", "wall per run [s]", "wall total [min]"], rows))
 
 
+def _fidelity_table(root: Path, cfg: dict) -> str:
+    """Each virtual test's relative l2 error against its measured mean beside the goal of its
+    role (config ``hifi.pipeline.fidelity_goal``): met, or missed and by how much."""
+    goals = cfg["hifi"]["pipeline"]["fidelity_goal"]
+    rows = []
+    for path in sorted((root / "virtual").glob("*/summary.json")):
+        summary = _read_json(path)
+        m = (summary or {}).get("measured")
+        if not m:
+            continue
+        role = str(summary.get("role", "prediction"))
+        goal = goals.get(role, goals["prediction"])
+        err = float(m["error_rel"])
+        verdict = ("<td>met</td>" if err <= goal else
+                   f"<td class='bad'>missed by {100 * (err - goal):.1f} points</td>")
+        rows.append(f"<tr><td>{html.escape(path.parent.name)}</td><td>{html.escape(role)}</td>"
+                    f"<td>{100 * err:.1f} %</td><td>{100 * goal:.0f} %</td>{verdict}</tr>")
+    if not rows:
+        return ""
+    head = "".join(f"<th>{h}</th>" for h in ("case", "role", "relative error", "goal", "verdict"))
+    return ("<h3>Virtual tests against the bending tests</h3><p class='note'>Relative l2 error of "
+            "each virtual test's force against the measured mean over its window; the goal is "
+            "the project's (calibration cases fitted on, the others predicted with no refit).</p>"
+            f"<table><tr>{head}</tr>{''.join(rows)}</table>")
+
+
 def hifi_section(results: Path, cfg: dict, measured: dict) -> str:
     """Everything of results/hifi that exists: cross-check Table 3, the calibration chain,
     the interface beside the paper's, the virtual tests, their energies and the cost."""
@@ -437,7 +463,8 @@ def hifi_section(results: Path, cfg: dict, measured: dict) -> str:
         return heading + NO_HIFI_NOTE
     paper = cfg.get("paper", {})
     cost = _HifiCost()
-    parts = [heading, HIFI_INTRO, _crosscheck_table(root, paper), _crosscheck_rom_figures(root),
+    parts = [heading, HIFI_INTRO, _fidelity_table(root, cfg), _crosscheck_table(root, paper),
+             _crosscheck_rom_figures(root),
              _interface_table(root, fits, cfg)]
     parts += [_calibration_step(p, paper, measured, cost) for p in fits]
     parts += [_single_runs(root, runs, measured, cost), _cost_table(cost, paper.get("cost", {}))]

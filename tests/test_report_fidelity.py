@@ -1,0 +1,31 @@
+"""The report's verdict on each virtual test: its error against the goal of its role."""
+from __future__ import annotations
+
+import json
+
+from harnesspipe import config
+from harnesspipe.report.html import _fidelity_table
+
+
+def _virtual(root, case, role, error_rel):
+    folder = root / "virtual" / case
+    folder.mkdir(parents=True)
+    (folder / "summary.json").write_text(json.dumps(
+        {"case": case, "role": role, "measured": {"test_id": case, "error_l2": 1.0,
+                                                  "error_rel": error_rel}}))
+
+
+def test_each_virtual_test_is_met_or_missed_by_its_roles_goal(tmp_path):
+    cfg = config.load()
+    assert cfg["hifi"]["pipeline"]["fidelity_goal"] == {"calibration": 0.10, "validation": 0.15,
+                                                        "prediction": 0.15}
+    _virtual(tmp_path, "cwb19_t2_closed", "calibration", 0.096)
+    _virtual(tmp_path, "cwb19_t2_fabric", "calibration", 0.14)       # 14 % > 10 %: missed
+    _virtual(tmp_path, "cwb19_t1_open_coarse", "validation", 0.14)   # 14 % <= 15 %: met
+    html = _fidelity_table(tmp_path, cfg)
+    rows = html.split("<tr>")[2:]
+    assert [r.split("</td>")[0].removeprefix("<td>") for r in rows] == [
+        "cwb19_t1_open_coarse", "cwb19_t2_closed", "cwb19_t2_fabric"]
+    assert "<td>met</td>" in rows[0] and "<td>met</td>" in rows[1]
+    assert "<td class='bad'>missed by 4.0 points</td>" in rows[2]
+    assert _fidelity_table(tmp_path / "nothing", cfg) == ""
