@@ -94,3 +94,15 @@ def test_smooth_step_time_inverts_the_amplitude():
     with pytest.raises(ValueError, match="outside"):
         smooth_step_time(1.5)
 
+
+
+def test_explicit_error_survives_a_process_boundary():
+    """A run that fails in a worker (multiprocessing, a campaign) re-raises with its diagnostics."""
+    import pickle
+
+    from harnesspipe.fe.solvers.central_difference import ExplicitError
+    err = ExplicitError("non-finite state", 12, 0.25, 1.5, 3.0, 4.75, 1e-6)
+    back = pickle.loads(pickle.dumps(err))
+    assert isinstance(back, ExplicitError) and str(back) == str(err)
+    assert (back.reason, back.step, back.time, back.ke, back.ie, back.w_ext, back.dt) == (
+        "non-finite state", 12, 0.25, 1.5, 3.0, 4.75, 1e-6)

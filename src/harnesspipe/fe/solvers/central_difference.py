@@ -58,6 +58,11 @@ class ExplicitError(RuntimeError):
             f"W_ext - KE - IE = {w_ext - ke - ie:.6g} (N mm: dissipated or held by contacts "
             f"and ties)")
 
+    def __reduce__(self):
+        """Picklable with its diagnostics (a run in a worker process re-raises it whole)."""
+        return (type(self), (self.reason, self.step, self.time, self.ke, self.ie, self.w_ext,
+                             self.dt))
+
 
 def smooth_step(x: float):
     """Amplitude S, dS/dx, d2S/dx2 of ``10 x^3 - 15 x^4 + 6 x^5`` (clamped to [0, 1])."""
