@@ -99,3 +99,29 @@ def test_orthotropic_stiffness_inverts_eq12_compliance():
     orthotropic_plane_stress_stiffness(E1, E2, nu12, G12, D)
     assert np.allclose(D @ S, np.eye(3), atol=1e-12)
     assert np.allclose(D, D.T)
+
+
+def test_fabric_law_with_yarn_buckling_stores_and_returns_energy():
+    """With the yarns' compression factor r_c the eq. 12 stress is the gradient of a strain
+    energy: the work around a closed strain loop through tension and compression of both
+    yarn directions vanishes (a stress cut at zero with the full Poisson coupling does not:
+    its tangent is not symmetric, and explicit runs gained energy from it)."""
+    from harnesspipe.fe.materials.plane_stress import orthotropic_plane_stress
+    E1, E2, nu12, G12, r_c = 93.5, 40.0, 0.4, 25.0, 0.05
+    D = np.zeros((3, 3))
+    orthotropic_plane_stress_stiffness(E1, E2, nu12 * r_c, G12, D)
+    c, s = np.cos(0.4), np.sin(0.4)
+    theta = np.linspace(0.0, 2.0 * np.pi, 20001)
+    path = np.column_stack([0.02 * np.cos(theta), 0.015 * np.sin(theta + 0.7),
+                            0.01 * np.sin(2 * theta)])
+    sig = np.zeros((theta.size, 3))
+    for i, e in enumerate(path):
+        orthotropic_plane_stress(e, c, s, D, r_c, sig[i])
+    work = np.sum(0.5 * (sig[1:] + sig[:-1]) * np.diff(path, axis=0))
+    scale = np.sum(np.abs(0.5 * (sig[1:] + sig[:-1]) * np.diff(path, axis=0)))
+    assert abs(work) < 1e-6 * scale
+    one = np.zeros(3)
+    orthotropic_plane_stress(np.array([-0.01, 0.0, 0.0]), 1.0, 0.0, D, r_c, one)
+    assert one[0] == pytest.approx(r_c * D[0, 0] * -0.01)       # a buckling warp yarn
+    orthotropic_plane_stress(np.array([0.01, 0.0, 0.0]), 1.0, 0.0, D, r_c, one)
+    assert one[0] == pytest.approx(D[0, 0] * 0.01)               # a stretched one: eq. 12

@@ -370,7 +370,7 @@ def element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, ef, loc, Dm, 
     E_hg, G, c_ps, nu_r = _moduli(ortho, me[0], me[1], me[3])
     mc = ms = 0.0
     if ortho:
-        orthotropic_plane_stress_stiffness(me[0], me[1], me[2], me[3], Dm)
+        orthotropic_plane_stress_stiffness(me[0], me[1], me[2] * me[MAT_COMPRESSION], me[3], Dm)
         mc, ms = st[S_MCOS], st[S_MSIN]
     n_sum, m_sum, pw, wp, e33 = _through_thickness(st, me, ortho, mc, ms, c_ps, nu_r, dt, d_m,
                                                    kappa, eps, sig, Dm, Dj, st_new, w4, w44)

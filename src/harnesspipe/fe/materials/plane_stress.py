@@ -168,22 +168,23 @@ def orthotropic_plane_stress(eps, c, s, Dmat, r_c, sig):
     ``sig`` (3,) in the (e1, e2) frame: sig = T^T Dmat T eps with T the engineering
     strain rotation, i.e. the stress that is work-conjugate to ``eps``.
 
-    ``r_c`` in (0, 1]: a woven fabric's yarns buckle in compression, so a compressive
-    stress along a yarn direction (t_11 < 0 or t_22 < 0, material axes) is scaled by
-    ``r_c`` (compressive-stress reduction of fabric membranes); ``r_c = 1`` is eq. 12 as
-    written.  The stress stays continuous (the scaling acts at t = 0).
+    ``r_c`` in (0, 1]: a woven fabric's yarns buckle in compression, so along a yarn
+    direction whose strain is compressive (material axes, m_11 < 0 or m_22 < 0) the
+    diagonal stiffness is scaled by ``r_c``.  The stress is the gradient of the
+    piecewise-quadratic energy 1/2 k_1 D_11 m_11^2 + 1/2 k_2 D_22 m_22^2 + D_12 m_11 m_22
+    + 1/2 D_66 g_12^2 (k_i = 1 or r_c): continuous, with a symmetric tangent; the caller
+    scales the Poisson coupling in ``Dmat`` by r_c (nu12 r_c) so that the energy stays
+    convex in every quadrant.  ``r_c = 1`` is eq. 12 as written.
     """
     cc, ss, cs = c * c, s * s, c * s
     m11 = cc * eps[0] + ss * eps[1] + cs * eps[2]
     m22 = ss * eps[0] + cc * eps[1] - cs * eps[2]
     m12 = 2.0 * cs * (eps[1] - eps[0]) + (cc - ss) * eps[2]
-    t11 = Dmat[0, 0] * m11 + Dmat[0, 1] * m22 + Dmat[0, 2] * m12
-    t22 = Dmat[1, 0] * m11 + Dmat[1, 1] * m22 + Dmat[1, 2] * m12
+    k1 = 1.0 if m11 >= 0.0 else r_c
+    k2 = 1.0 if m22 >= 0.0 else r_c
+    t11 = k1 * Dmat[0, 0] * m11 + Dmat[0, 1] * m22 + Dmat[0, 2] * m12
+    t22 = Dmat[1, 0] * m11 + k2 * Dmat[1, 1] * m22 + Dmat[1, 2] * m12
     t12 = Dmat[2, 0] * m11 + Dmat[2, 1] * m22 + Dmat[2, 2] * m12
-    if t11 < 0.0:
-        t11 *= r_c
-    if t22 < 0.0:
-        t22 *= r_c
     sig[0] = cc * t11 + ss * t22 - 2.0 * cs * t12
     sig[1] = ss * t11 + cc * t22 + 2.0 * cs * t12
     sig[2] = cs * (t11 - t22) + (cc - ss) * t12
