@@ -101,3 +101,50 @@ def test_alpha_from_the_shipped_data_within_10_percent_of_truth(tmp_path):
     check = stage.predict(refs["outofplane"], settings, tmp_path / "outofplane", "outofplane",
                           fit["parameters"]["alpha"], "validation", "validation")
     assert check["error_rel"] < 0.05
+
+
+@pytest.mark.parametrize("load_case, moved, still", [("inplane", "y_mm", "z_mm"),
+                                                     ("outofplane", "z_mm", "y_mm")])
+def test_written_shapes_hold_the_model_axes(tmp_path, monkeypatch, load_case, moved, still):
+    """The branch stage's shapes (shapes.csv, the VTUs ParaView opens) hold the model's x, y, z
+    (issue 30): the in-plane pull moves S2's tip along y, the out-of-plane pull along z, by the
+    crosshead travel, and leaves the other axis within a few per cent of it."""
+    import meshio
+    import pandas as pd
+
+    from harnesspipe.config import REPO_ROOT, load
+    from harnesspipe.stages import branch as stage
+    from harnesspipe.stages.data import prepare_test
+    options = stage.model_options
+    monkeypatch.setattr(stage, "model_options", lambda s: {**options(s), **COARSE})
+    ref = prepare_test(REPO_ROOT / "data" / "experimental", f"branch_{load_case}",
+                       tmp_path / f"branch_{load_case}.h5")
+    fit = stage.predict(ref, load()["branch"], tmp_path, load_case, 0.2, "check", "validation")
+    assert fit["load_case"] == load_case
+    shapes = pd.read_csv(tmp_path / "shapes.csv")
+    tip = shapes[shapes["node"] == shapes["node"].max()].set_index("displacement_mm")
+    for d in stage.SHAPES_AT:
+        assert tip.loc[d, moved] == pytest.approx(d, rel=0.02)
+        assert abs(tip.loc[d, still]) < 0.02 * d
+    last = meshio.read(tmp_path / f"shape_{len(stage.SHAPES_AT) - 1:03d}.vtu").points
+    axis = {"y_mm": 1, "z_mm": 2}[moved]
+    assert last[-1, axis] == pytest.approx(stage.SHAPES_AT[-1], rel=0.02)
+
+
+def test_report_draws_out_of_plane_shapes_on_the_markers_axis():
+    """The report's shape figure compares the markers' second coordinate with the model's z
+    when asked to (the out-of-plane camera), not with y."""
+    from types import SimpleNamespace
+
+    import pandas as pd
+
+    from harnesspipe.report import plots
+    markers = np.array([[10.0, 10.0, 0, 100.0, 7.0]])          # time, displacement, index, x, y
+    prepared = SimpleNamespace(samples={"s1": {"markers": markers}})
+    shapes = pd.DataFrame({"displacement_mm": 10.0, "node": [0, 1], "x_mm": [0.0, 200.0],
+                           "y_mm": [0.0, 0.0], "z_mm": [0.0, 10.0]})
+    fig = plots.shape_figure(prepared, shapes, vertical="z")
+    ax = fig.axes[0]
+    np.testing.assert_array_equal(ax.lines[0].get_ydata(), [0.0, 10.0])
+    np.testing.assert_array_equal(ax.lines[1].get_ydata(), [7.0])
+    assert ax.get_ylabel() == "z [mm]"

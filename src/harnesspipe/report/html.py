@@ -140,7 +140,9 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
             and any("markers" in s for s in prepared.samples.values())):
         shapes = pd.read_csv(fit_dir / "shapes.csv")
         shapes = shapes[shapes["displacement_mm"] > 0]
-        figs.append(_img(plots.shape_figure(prepared, shapes, title=f"{fit['item']}: bent shapes"),
+        vertical = "z" if fit.get("load_case") == "outofplane" else "y"   # the markers' axis
+        figs.append(_img(plots.shape_figure(prepared, shapes, title=f"{fit['item']}: bent shapes",
+                                            vertical=vertical),
                          f"shapes {fit['item']}"))
     trace = _load_trace(fit_dir / "trace.h5")
     if trace is not None and len(trace):

@@ -69,14 +69,18 @@ def png_bytes(fig) -> bytes:
     return buf.getvalue()
 
 
-def shape_figure(prepared, shapes, title=""):
-    """Bent shapes: measured marker positions (dots) against the model's centre line."""
+def shape_figure(prepared, shapes, title="", vertical="y"):
+    """Bent shapes: measured marker positions (dots) against the model's centre line.
+
+    ``shapes`` holds the model's x, y, z; ``vertical`` (``"y"`` or ``"z"``) is the model axis
+    the markers' second coordinate records (``"z"`` for the out-of-plane pull, whose camera
+    looks along the harness plane)."""
     fig, ax = plt.subplots(figsize=(5.2, 3.0), dpi=110)
     frames = sorted(set(shapes["displacement_mm"]))
     colours = plt.cm.viridis(np.linspace(0.0, 0.85, max(len(frames), 1)))
     for d, c in zip(frames, colours):
         s = shapes[shapes["displacement_mm"] == d]
-        ax.plot(s["x_mm"], s["y_mm"], color=c, lw=1.4, label=f"model, u = {d:g} mm")
+        ax.plot(s["x_mm"], s[f"{vertical}_mm"], color=c, lw=1.4, label=f"model, u = {d:g} mm")
         for sample in prepared.samples.values():
             m = sample.get("markers")
             if m is None:
@@ -85,7 +89,7 @@ def shape_figure(prepared, shapes, title=""):
             ax.plot(m[:, 3], m[:, 4], "o", ms=3.5, mfc="none", color=c)
     ax.plot([], [], "o", mfc="none", color="0.3", label="markers (3 samples)")
     ax.set_aspect("equal")
-    return _finish(fig, ax, "x [mm]", "y [mm]", title, legend_size=7, legend_at="lower right")
+    return _finish(fig, ax, "x [mm]", f"{vertical} [mm]", title, legend_size=7, legend_at="lower right")
 
 
 # --------------------------------------------------------------------------- hi-fi section

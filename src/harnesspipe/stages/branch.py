@@ -48,9 +48,7 @@ def _write(outdir: Path, item: str, ref, alpha: float, settings: dict, load_case
     curve, shapes = branch.simulate(load_case, alpha, return_shapes=True, shape_at=SHAPES_AT,
                                     **model_options(settings))
     wall_s = time.perf_counter() - t0
-    if load_case == "outofplane":  # markers record the out-of-plane coordinate as y
-        shapes = {d: xyz[:, [0, 2, 1]] for d, xyz in shapes.items()}
-    write_shapes(outdir, shapes)
+    write_shapes(outdir, shapes)  # the model's x, y, z (z out of plane); the report picks the markers' axis
     F_model = np.interp(ref.grid, curve["displacement_mm"], curve["force_N"])
     path = write_fit(outdir, stage="branch", item=item, test_id=ref.test_id,
                      parameters={"alpha": alpha}, error_l2=l2_error(ref.mean, F_model),

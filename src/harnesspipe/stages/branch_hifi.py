@@ -57,10 +57,7 @@ def run(settings: dict, outdir: Path, table2: Path | None = None, curve_csv: Pat
                stroke=float(settings["stroke"]), progress=progress)
     outdir = Path(outdir)
     write_csv(outdir / "energies.csv", res.history)
-    shapes = res.shapes
-    if settings["load_case"] == "outofplane":   # markers record the out-of-plane coordinate as y
-        shapes = {d: xyz[:, [0, 2, 1]] for d, xyz in shapes.items()}
-    write_shapes(outdir, shapes)
+    write_shapes(outdir, res.shapes)   # the model's x, y, z (z out of plane)
     summary = {**res.summary, "stroke": float(settings["stroke"]),
                "t_phys": inp.explicit["t_phys"],
                "parameters": {"interface": inp.interface, "explicit": inp.explicit,
