@@ -1,6 +1,7 @@
 """Standard errors of fitted parameters (calibrate/uncertainty.py) against linear regression
 theory and a Monte-Carlo experiment."""
 import numpy as np
+import pandas as pd
 import pytest
 from scipy.optimize import least_squares
 
@@ -252,3 +253,84 @@ def test_fit_summary_keeps_the_sandwich_and_adds_fisher_and_chi_square():
     assert out["standard_error"]["a"] > 5 * out["fisher"]["standard_error"]["a"]
     one = unc.fit_summary(line_and_square, p, ["a", "b"], ROWS, R[:1])
     assert one["standard_error_dof"] == ROWS.size - 2 and one["chi_square"]["dof"] == ROWS.size - 2
+
+
+# --- prediction band of the fitted curve, flow-stress band (report, issue 29 item 6) -----
+
+def test_prediction_band_of_a_linear_model_is_the_analytic_one():
+    """F = X beta: Var F_i = X_i Cov(beta) X_i^T exactly.  In ln p, J_ij = X_ij beta_j and
+    Cov(ln p) = Cov(beta) / (beta_j beta_k); prediction_band must give the same, and
+    fit_statistics' band_N (its J by central differences, the noise off the rows) the
+    analytic band at the noise it estimated."""
+    beta = np.array([0.7, -0.01])
+    X = np.column_stack([ROWS, ROWS**2])
+    cov_beta = np.array([[4e-4, -1e-5], [-1e-5, 6e-7]])
+    analytic = np.sqrt(np.einsum("ij,jk,ik->i", X, cov_beta, X))
+    J = X * beta
+    band = unc.prediction_band(J, cov_beta / np.outer(beta, beta))
+    np.testing.assert_allclose(band, analytic, rtol=1e-12)
+    rng = np.random.default_rng(41)
+    p = {"a": beta[0], "b": beta[1]}
+    R = line_and_square(p) + 0.05 * rng.standard_normal((3, ROWS.size))
+    result = unc.fit_statistics(line_and_square, p, ["a", "b"], ROWS, R)
+    s2_mean = result["noise_sigma_N"] ** 2 / 3            # rms over 3 specimens, of their mean
+    expected = np.sqrt(s2_mean * np.einsum("ij,jk,ik->i", X, np.linalg.inv(X.T @ X), X))
+    np.testing.assert_allclose(result["band_N"], expected, rtol=1e-6)
+    # F(0) = 0 is certain; elsewhere the fit averages many rows: below one row's noise of the mean
+    assert result["band_N"][0] == 0.0 and 0.0 < result["band_N"].max() < 0.05 / np.sqrt(3)
+
+
+def test_prediction_band_is_finite_where_a_parameter_is_not_determined():
+    """F = a c u fixes only the product a c: a and c separately have no standard error, but
+    the band is that of the product, as fitted with the one parameter k = a c."""
+    rng = np.random.default_rng(43)
+    R = 0.7 * ROWS + 0.05 * rng.standard_normal((3, ROWS.size))
+    both = unc.fit_statistics(lambda p: p["a"] * p["c"] * ROWS, {"a": 0.5, "c": 1.4}, ["a", "c"],
+                              ROWS, R)
+    assert both["standard_error"] == {"a": None, "c": None}
+    one = unc.fit_statistics(lambda p: p["k"] * ROWS, {"k": 0.7}, ["k"], ROWS, R)
+    np.testing.assert_allclose(both["band_N"], one["standard_error"]["k"] * 0.7 * ROWS, rtol=1e-4)
+    np.testing.assert_allclose(one["band_N"], one["standard_error"]["k"] * 0.7 * ROWS, rtol=1e-4)
+
+
+def test_flow_stress_band_is_the_delta_method_and_matches_sampling():
+    """sigma = sigma_Y + K eps^n: the delta-method sd against the spread of sigma over
+    50 000 draws of ln p ~ N(ln p*, C) with a small (linear-regime) correlated C, at
+    plastic strains 1e-3 .. 0.1; E in the covariance does not enter."""
+    p = {"E": 900.0, "sigma_y": 8.0, "K": 30.0, "n": 0.45}
+    names = ["E", "sigma_y", "K", "n"]
+    se = np.array([0.01, 0.02, 0.03, 0.02])
+    corr = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, -0.5, -0.3],
+                     [0.0, -0.5, 1.0, 0.8], [0.0, -0.3, 0.8, 1.0]])
+    C = corr * np.outer(se, se)
+    eps = np.array([1e-3, 1e-2, 0.1])
+    sigma, sd = unc.flow_stress_band(p, names, C, eps)
+    np.testing.assert_allclose(sigma, 8.0 + 30.0 * eps**0.45)
+    draws = np.exp(np.log([p[k] for k in names])
+                   + np.random.default_rng(47).multivariate_normal(np.zeros(4), C, 50_000))
+    sampled = draws[:, 1, None] + draws[:, 2, None] * eps ** draws[:, 3, None]
+    np.testing.assert_allclose(sd, sampled.std(axis=0), rtol=0.03)
+    only_E = np.diag([0.01, 0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(unc.flow_stress_band(p, names, only_E, eps)[1], 0.0)
+
+
+def test_curve_bands_put_the_band_on_the_curve_grid_and_the_flow_stress_in_fit_json():
+    """curve_bands: 1.96 sd interpolated from the rows onto the curve's grid (NaN beyond the
+    rows), band_N popped from the summary; the flow stress at 25 strains over the span,
+    with no band when a standard error is missing."""
+    u = np.linspace(0.0, 10.0, 101)
+    p = {"E": 900.0, "sigma_y": 8.0, "K": 30.0, "n": 0.45}
+    fisher = {"names": ["E", "sigma_y", "K", "n"],
+              "standard_error": {"E": 0.01, "sigma_y": 0.02, "K": 0.03, "n": 0.02},
+              "correlation": np.eye(4).tolist()}
+    curve = pd.DataFrame({"displacement_mm": [0.0, 5.0, 12.0], "force_N": [0.0, 1.0, 2.0]})
+    summary = {"fisher": fisher, "band_N": 0.1 * u}
+    out, flow = unc.curve_bands(summary, p, u, curve, (1e-3, 0.01, 0.1))
+    assert "band_N" not in summary
+    np.testing.assert_allclose(out["band_N"][:2], [0.0, unc.Z95 * 0.5])
+    assert np.isnan(out["band_N"][2])
+    assert len(flow["eps_p"]) == 25 and flow["eps_p"][0] == 1e-3 and flow["eps_p"][-1] == 0.1
+    _, sd = unc.flow_stress_band(p, fisher["names"], np.diag([1e-4, 4e-4, 9e-4, 4e-4]), 0.1)
+    assert flow["band"][-1] == pytest.approx(unc.Z95 * sd[0], rel=1e-3)
+    fisher["standard_error"]["n"] = None
+    assert unc.curve_bands({"fisher": fisher}, p, u, curve, (1e-3, 0.1))[1]["band"] is None

@@ -96,6 +96,26 @@ def log_covariance(J: np.ndarray, variance: float) -> np.ndarray:
     return _blank_undetermined(0.5 * (cov + cov.T), V, keep)   # symmetric to the last digit
 
 
+def prediction_band(J: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    """Standard deviation of the fitted curve, Var F_i = J_i C J_i^T (delta method: the
+    parameter covariance C of ln p propagated through J_ij = dF_i / d ln p_j)."""
+    J = np.atleast_2d(np.asarray(J, dtype=float))
+    return np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", J, np.asarray(cov, dtype=float), J), 0.0))
+
+
+def flow_stress_band(params: dict, names: list[str], cov: np.ndarray, eps_p) -> tuple[np.ndarray, np.ndarray]:
+    """(sigma, its standard deviation) of eq. 2, sigma = sigma_Y + K eps_p^n, at ``eps_p``, by
+    the delta method from Cov(ln p) over ``names``: Var sigma = g C g^T with the gradient
+    in ln p  g = (d/d ln sigma_Y, d/d ln K, d/d ln n) = (sigma_Y, K eps^n, K eps^n n ln eps)
+    (zero for the other names, e.g. E)."""
+    eps = np.asarray(eps_p, dtype=float)
+    hard = params["K"] * eps ** params["n"]
+    grad = {"sigma_y": np.full_like(eps, params["sigma_y"]), "K": hard,
+            "n": hard * params["n"] * np.log(eps)}
+    G = np.column_stack([grad.get(k, np.zeros_like(eps)) for k in names])
+    return params["sigma_y"] + hard, prediction_band(G, cov)
+
+
 def residual_variance(residual: np.ndarray, n_parameters: int) -> float:
     """s^2 = ||r||^2 / (N - m), the per-point error variance left by a fit."""
     r = np.asarray(residual, dtype=float)
@@ -242,7 +262,9 @@ def fit_statistics(curve: Callable[[dict], np.ndarray], params: dict, names: lis
 
     Returns {"noise_sigma_N": s of one specimen's rows (rms over the specimens),
     "names", "standard_error": {name: SE of ln p or None}, "correlation": matrix,
-    "chi_square": :func:`chi_square` of the mean's residual} or None when a perturbed
+    "chi_square": :func:`chi_square` of the mean's residual, "band_N": the standard deviation
+    of the fitted curve on ``u`` (:func:`prediction_band` with the covariance on the directions
+    the curve determines: an undetermined one does not move the curve)} or None when a perturbed
     simulation fails or the fit sits on a boundary (as :func:`fit_standard_errors`)."""
     R = np.atleast_2d(np.asarray(replicates, dtype=float))
     if R.shape[1] != np.size(u):
@@ -260,7 +282,9 @@ def fit_statistics(curve: Callable[[dict], np.ndarray], params: dict, names: lis
     if norms.min() < BOUNDARY * norms.max():
         return None
     cov = log_covariance(J, variance)
-    return {"noise_sigma_N": float(np.sqrt(s2.mean())), "names": list(names),
+    P = _pseudo_inverse(J)[0]
+    band = prediction_band(J, variance * P @ P.T)    # J (J^T J)^+ J^T: finite in any case
+    return {"noise_sigma_N": float(np.sqrt(s2.mean())), "names": list(names), "band_N": band,
             "standard_error": dict(zip(names, _finite_or_none(np.sqrt(np.diag(cov))))),
             "correlation": correlation(cov),
             "chi_square": chi_square(residual, variance, len(names))}
@@ -274,19 +298,62 @@ def fit_summary(curve: Callable[[dict], np.ndarray], params: dict, fitted: list[
     * ``standard_error``, ``standard_error_dof``, ``replicate_correlation``: the replicate
       sandwich (:func:`fit_covariance`; ``fitted`` by least squares, ``closed_form`` name ->
       value on each replicate), or the single curve's residual;
-    * ``fisher``, ``chi_square``: :func:`fit_statistics` over every parameter in ``params``.
+    * ``fisher``, ``chi_square``: :func:`fit_statistics` over every parameter in ``params``;
+    * ``band_N``: the Fisher standard deviation of the fitted curve on ``u`` (an array, for
+      the stage to put beside its curve, not into fit.json).
     Entries that cannot be computed are None."""
     R = np.atleast_2d(np.asarray(replicates, dtype=float))
     reps = R if len(R) >= 2 else None
     found = fit_covariance(curve, params, fitted, R.mean(axis=0), reps, closed_form)
     stats_ = fit_statistics(curve, params, list(params), u, R)
     out = {"standard_error": None, "standard_error_dof": error_dof(R.shape[1], fitted, reps),
-           "replicate_correlation": None, "fisher": None, "chi_square": None}
+           "replicate_correlation": None, "fisher": None, "chi_square": None, "band_N": None}
     if found is not None:
         names, cov = found
         out["standard_error"] = dict(zip(names, _finite_or_none(np.sqrt(np.diag(cov)))))
         out["replicate_correlation"] = {"names": names, "matrix": correlation(cov)}
     if stats_ is not None:
         out["chi_square"] = stats_.pop("chi_square")
+        out["band_N"] = stats_.pop("band_N")
         out["fisher"] = stats_
     return out
+
+
+Z95 = float(stats.norm.ppf(0.975))   # half-width of a 95 % band in standard deviations
+FLOW_POINTS = 25                      # plastic strains of fit.json's flow-stress band
+
+
+def fisher_covariance(fisher: dict | None) -> np.ndarray | None:
+    """Cov(ln p) of fit.json's ``fisher`` entry, C_jk = se_j se_k corr_jk (None if any
+    standard error or correlation is missing: a parameter the curve does not determine)."""
+    if not fisher:
+        return None
+    se = [fisher["standard_error"].get(k) for k in fisher["names"]]
+    corr = fisher["correlation"]
+    if any(v is None for v in se) or any(c is None for row in corr for c in row):
+        return None
+    se = np.asarray(se, dtype=float)
+    return np.asarray(corr, dtype=float) * np.outer(se, se)
+
+
+def curve_bands(summary: dict, params: dict, u, curve, strains) -> tuple[object, dict]:
+    """The report's bands of a fit, from :func:`fit_summary`'s ``summary`` (its ``band_N`` on
+    the rows ``u`` is popped): ``curve`` (displacement_mm, force_N) with a column ``band_N``,
+    the 95 % half-width Z95 sd(F) interpolated from the rows onto the curve's grid (NaN
+    outside the rows), and fit.json's ``flow_stress`` {eps_p, sigma, band}: eq. 2 and its 95 %
+    half-width (:func:`flow_stress_band` with :func:`fisher_covariance`; band None when that
+    is missing) at FLOW_POINTS plastic strains spaced geometrically over ``strains``' span.
+    No model runs: J is the one :func:`fit_statistics` computed."""
+    band = summary.pop("band_N", None)
+    curve = curve.copy()
+    x = np.asarray(curve["displacement_mm"], dtype=float)
+    curve["band_N"] = (np.full(x.size, np.nan) if band is None
+                       else Z95 * np.interp(x, u, band, left=np.nan, right=np.nan))
+    eps = np.geomspace(min(strains), max(strains), FLOW_POINTS)
+    fisher = summary.get("fisher")
+    cov = fisher_covariance(fisher)
+    names = fisher["names"] if fisher else ["sigma_y", "K", "n"]
+    sigma, sd = flow_stress_band(params, names, np.zeros((len(names),) * 2) if cov is None else cov, eps)
+    flow = {"eps_p": [float(f"{e:.4g}") for e in eps], "sigma": [float(f"{s:.6g}") for s in sigma],
+            "band": None if cov is None else [float(f"{Z95 * d:.4g}") for d in sd]}
+    return curve, flow

@@ -13,6 +13,7 @@ import pandas as pd
 
 from harnesspipe.calibrate import rom as rom_fit
 from harnesspipe.calibrate.objective import l2_error, relative_l2_error
+from harnesspipe.calibrate.uncertainty import curve_bands
 from harnesspipe.config import ConfigError
 from harnesspipe.report import plots
 from harnesspipe.stages.common import read_fit, write_csv, write_fit, write_shapes
@@ -44,7 +45,9 @@ def reference_curve(path: Path, settings: dict):
 def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
     """Calibrate one case; write fit.json, curve.csv, trace.h5, shapes (CSV, VTU) and fit.png.
     fit.json holds, besides the parameters, their uncertainty
-    (:func:`harnesspipe.calibrate.rom.fit_uncertainty`) and ``rows``, the rows fitted."""
+    (:func:`harnesspipe.calibrate.rom.fit_uncertainty`), ``rows``, the rows fitted, and
+    ``flow_stress`` (eq. 2 and its 95 % band over ``rom.reference_strains``' span); curve.csv
+    the fitted curve's 95 % band ``band_N`` (:func:`harnesspipe.calibrate.uncertainty.curve_bands`)."""
     outdir = Path(outdir)
     u, forces, test_id, source = reference_curve(reference, settings)
     F_ref = forces.mean(axis=0)
@@ -55,6 +58,8 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
     uncertainty = rom_fit.fit_uncertainty(u, replicates, result.parameters, settings)
     curve, shapes = rom_fit.simulate(result.parameters, settings, return_shapes=True)
     curve = curve.rename(columns={"deflection_mm": "displacement_mm"})
+    curve, flow = curve_bands(uncertainty, result.parameters, u, curve,
+                              settings["rom"]["reference_strains"])
     write_shapes(outdir, shapes)
     F_fit = np.interp(u, curve["displacement_mm"], curve["force_N"])
     path = write_fit(outdir, stage="rom", item=case, test_id=test_id,
@@ -65,7 +70,7 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
                      extra={"E_eq13": result.E_eq13, "sigma_y_eq13": result.sigma_y_eq13,
                             "reference": settings["reference"],
                             "fitted": list(settings["rom"]["simplex_parameters"]),
-                            "rows": int(u.size), **uncertainty})
+                            "rows": int(u.size), **uncertainty, "flow_stress": flow})
     title = f"{case}: ROM at fitted properties"
     if settings["reference"] == "hifi":
         fig = plots.hifi_rom_figure(source, curve, title=title, label="hi-fi virtual test")

@@ -17,7 +17,7 @@ import pandas as pd
 
 from harnesspipe.calibrate import tensile as tcal
 from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
-from harnesspipe.calibrate.uncertainty import fit_summary
+from harnesspipe.calibrate.uncertainty import curve_bands, fit_summary
 from harnesspipe.models import tensile as tmodel
 from harnesspipe.report import plots
 from harnesspipe.stages.common import read_fit, write_csv, write_fit
@@ -30,7 +30,9 @@ def fit_component(component: str, reference: Path, settings: dict, outdir: Path)
     """Calibrate one covering on every measured row; write fit.json, curve.csv, trace.h5
     and fit.png.  fit.json holds, besides the parameters, their uncertainty
     (:func:`harnesspipe.calibrate.uncertainty.fit_summary`) and ``rows``, the number of
-    measured rows fitted."""
+    measured rows fitted, and ``flow_stress`` (eq. 2 and its 95 % band over the plastic
+    strains of the flow-stress coordinates); curve.csv the fitted curve's 95 % band ``band_N``
+    (:func:`harnesspipe.calibrate.uncertainty.curve_bands`)."""
     outdir = Path(outdir)
     ref = read_prepared(reference)
     scale = tmodel.crosshead_scale(component)
@@ -61,7 +63,8 @@ def fit_component(component: str, reference: Path, settings: dict, outdir: Path)
         return np.interp(u_rows, c["displacement_mm"], c["force_N"])
     extra.update(fit_summary(on_rows, params, list(TABLE2_COLUMNS[1:]), u_rows, F_rows))
     extra["rows"] = int(u_rows.size)
-    curve = simulate(params)
+    strains = tcal.FABRIC_STRAINS if component == "fabric_tube" else tcal.TUBE_STRAINS
+    curve, extra["flow_stress"] = curve_bands(extra, params, u_rows, simulate(params), strains)
     F_fit, F_mean = on_rows(params), F_rows.mean(axis=0)
     path = write_fit(outdir, stage="tensile", item=component, test_id=ref.test_id, parameters=params,
                      error_l2=l2_error(F_mean, F_fit), error_rel=relative_l2_error(F_mean, F_fit),
