@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe import __version__
+from harnesspipe.calibrate.uncertainty import Z95
 from harnesspipe.data.synthesize import read_truth
 from harnesspipe.report import plots
 from harnesspipe.stages.common import read_fit
@@ -113,10 +114,69 @@ def _standard_error_cells(fit: dict, names) -> list[str]:
     return [_standard_error(se[k]) if k in se else "" for k in names]
 
 
+DETERMINED, UNDETERMINED = 0.05, 0.3   # standard error of ln p: "determines" below, "does not" above
+SYMBOLS = {"E": "E", "sigma_y": "sigma_Y", "K": "K", "n": "n"}
+
+
+def _pct(se) -> str:
+    return "not determined" if se is None else f"\u00b1{100.0 * se:.2g} %"
+
+
+def _listed(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def _determined_flow(flow: dict | None) -> str | None:
+    """'the flow stress at a-b % plastic strain (+-x %)' over the longest run of plastic strains
+    whose relative standard error band / (Z95 sigma) is below DETERMINED (None: no such run)."""
+    if not flow or flow.get("band") is None:
+        return None
+    rel = np.asarray(flow["band"], dtype=float) / (Z95 * np.asarray(flow["sigma"], dtype=float))
+    best, start = (0, 0), None
+    for i, ok in enumerate(list(rel < DETERMINED) + [False]):
+        if ok and start is None:
+            start = i
+        elif not ok and start is not None:
+            best, start = max(best, (start, i), key=lambda r: r[1] - r[0]), None
+    if best[1] == best[0]:
+        return None
+    eps = flow["eps_p"][best[0]:best[1]]
+    return (f"the flow stress at {100 * eps[0]:.2g}-{100 * eps[-1]:.2g} % plastic strain "
+            f"({_pct(float(rel[best[0]:best[1]].max()))})")
+
+
+def determination_sentence(fit: dict) -> str | None:
+    """What the fit's data determine, in plain words, from fit.json's Fisher standard errors
+    (load-cell noise, ln p) and ``flow_stress`` band: parameters (and the longest plastic
+    strain range of the flow stress) with an SE below DETERMINED, those above UNDETERMINED or
+    without one, and the rest "only roughly".  None when the fit has no Fisher errors."""
+    fisher = fit.get("fisher")
+    if not fisher:
+        return None
+    se = {k: fisher["standard_error"].get(k) for k in fisher["names"]}
+    good = [f"{SYMBOLS.get(k, k)} ({_pct(v)})" for k, v in se.items() if v is not None and v < DETERMINED]
+    flow = _determined_flow(fit.get("flow_stress"))
+    good += [flow] if flow else []
+    bad = [k for k, v in se.items() if v is None or v > UNDETERMINED]
+    rough = [k for k in se if k not in bad and se[k] >= DETERMINED]
+    parts = [f"The curve determines {_listed(good)}" if good
+             else f"The curve determines no quantity to within {100 * DETERMINED:.0f} %"]
+    if bad:
+        parts.append(f"{_listed([SYMBOLS.get(k, k) for k in bad])} "
+                     f"{'separately ' if len(bad) > 1 else ''}it does not "
+                     f"({', '.join(_pct(se[k]) for k in bad)})")
+    if rough:
+        parts.append(f"{_listed([SYMBOLS.get(k, k) for k in rough])} only roughly "
+                     f"({', '.join(_pct(se[k]) for k in rough)})")
+    return ("; ".join(parts) + ". (Fisher standard errors from the load-cell noise; the "
+            "shaded bands are 95 %.)")
+
+
 def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dict | None,
               reference: pd.DataFrame | None = None) -> str:
-    """One fit: values beside truth and paper, the curve against the measured band (``prepared``,
-    may be None) and, for a ROM fitted to a hi-fi virtual test, that ``reference`` curve."""
+    """One fit: values beside truth and paper, the curve (with its 95 % band) against the
+    measured band (``prepared``, may be None) and, for a ROM fitted to a hi-fi virtual test,
+    that ``reference`` curve; the flow stress with its band and :func:`determination_sentence`."""
     curve = pd.read_csv(fit_dir / "curve.csv")
     names = list(fit["parameters"])
     label = "fitted" if fit.get("role", "calibration") == "calibration" else f"used ({fit['role']}, no refit)"
@@ -135,7 +195,12 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
             f"{fit['nfev']} evaluations, {fit['wall_s']:.1f} s.{status}</p>"
             + _table(["", *names], rows)
             + (SE_NOTE.format(dof=fit.get("standard_error_dof", "?")) if shown else ""))
+    sentence = determination_sentence(fit)
+    text += f'<p class="determined">{html.escape(sentence)}</p>' if sentence else ""
     figs = [_img(plots.fit_figure(prepared, curve, title=fit["item"], reference=reference), f"fit {fit['item']}")]
+    if fit.get("flow_stress"):
+        figs.append(_img(plots.flow_stress_figure(fit["flow_stress"], title=f"{fit['item']}: flow stress"),
+                         f"flow stress {fit['item']}"))
     if ((fit_dir / "shapes.csv").exists() and prepared is not None
             and any("markers" in s for s in prepared.samples.values())):
         shapes = pd.read_csv(fit_dir / "shapes.csv")

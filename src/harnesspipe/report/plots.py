@@ -22,7 +22,8 @@ def _finish(fig, ax, xlabel: str, ylabel: str, title: str, legend_size: int, leg
 
 
 def fit_figure(prepared, curve=None, title="", xlabel="displacement [mm]", label="simulated", reference=None):
-    """Band (min/max of the replicates), their mean and a simulated curve; ``reference``
+    """Band (min/max of the replicates), their mean and a simulated curve (with its 95 % band
+    when ``curve`` has a ``band_N`` column, the half-width); ``reference``
     (displacement_mm, force_N): the hi-fi curve a ROM was fitted to, when not the mean;
     ``prepared`` None: no measured test to show."""
     fig, ax = plt.subplots(figsize=(5.2, 3.6), dpi=110)
@@ -37,7 +38,23 @@ def fit_figure(prepared, curve=None, title="", xlabel="displacement [mm]", label
                 label="hi-fi virtual test (reference)")
     if curve is not None:
         ax.plot(curve["displacement_mm"], curve["force_N"], color="tab:red", lw=1.6, ls="--", label=label)
+        if "band_N" in curve and np.any(np.isfinite(curve["band_N"])):
+            x, F, b = (np.asarray(curve[k], dtype=float) for k in ("displacement_mm", "force_N", "band_N"))
+            ax.fill_between(x, F - b, F + b, color="tab:red", alpha=0.3, lw=0,
+                            label="model 95 % band (parameters)")
     return _finish(fig, ax, xlabel, "force [N]", title, legend_size=8)
+
+
+def flow_stress_figure(flow: dict, title=""):
+    """Eq. 2 flow stress sigma_Y + K eps_p^n of a fit against the plastic strain (log scale)
+    and, when there is one, its 95 % band (fit.json ``flow_stress``)."""
+    fig, ax = plt.subplots(figsize=(4.2, 3.0), dpi=110)
+    eps, sigma = np.asarray(flow["eps_p"], dtype=float), np.asarray(flow["sigma"], dtype=float)
+    ax.semilogx(eps, sigma, color="tab:red", lw=1.6, label="fitted")
+    if flow.get("band") is not None:
+        b = np.asarray(flow["band"], dtype=float)
+        ax.fill_between(eps, sigma - b, sigma + b, color="tab:red", alpha=0.3, lw=0, label="95 % band")
+    return _finish(fig, ax, "plastic strain", "flow stress [MPa]", title, legend_size=8)
 
 
 def trace_figure(trace, title=""):
