@@ -50,7 +50,7 @@ def test_fit_figure_shades_the_models_band_beside_the_specimens():
     x = np.linspace(0.0, 10.0, 11)
     curve = pd.DataFrame({"displacement_mm": x, "force_N": 2.0 * x, "band_N": 0.1 * x})
     ax = plots.fit_figure(None, curve).axes[0]
-    [band] = [c for c in ax.collections if c.get_label() == "model 95 % band (parameters)"]
+    [band] = [c for c in ax.collections if c.get_label() == "model 95 % band (parameters, \u00b11 N at most)"]
     y = band.get_paths()[0].vertices[:, 1]
     assert y.min() == 0.0 and np.isclose(y.max(), 21.0)           # F + band at 10 mm
     assert not [c for c in plots.fit_figure(None, curve.drop(columns="band_N")).axes[0].collections]

@@ -41,7 +41,7 @@ def fit_figure(prepared, curve=None, title="", xlabel="displacement [mm]", label
         if "band_N" in curve and np.any(np.isfinite(curve["band_N"])):
             x, F, b = (np.asarray(curve[k], dtype=float) for k in ("displacement_mm", "force_N", "band_N"))
             ax.fill_between(x, F - b, F + b, color="tab:red", alpha=0.3, lw=0,
-                            label="model 95 % band (parameters)")
+                            label=f"model 95 % band (parameters, \u00b1{np.nanmax(b):.2g} N at most)")
     return _finish(fig, ax, xlabel, "force [N]", title, legend_size=8)
 
 
