@@ -260,13 +260,24 @@ def test_wires_sharing_a_node_are_rejected():
         HifiSystem(mesh, inp)
 
 
-def test_unstable_run_fails_with_diagnostics_and_writes_nothing(tmp_path):
-    r = _cli("--case", "cwb19_t2_closed", "--profile", "quick", "--set", "safety=4.0",
-             "--set", "t_total=0.05", "--out", str(tmp_path / "a.csv"),
-             "--summary", str(tmp_path / "a.json"))
+def test_rejected_run_fails_with_diagnostics_and_writes_nothing(tmp_path):
+    """A run the explicit checks reject (here: limits no run meets, in a config file; the
+    stable-step safety factor above 1 that once forced a blow-up is now refused as input)
+    exits 3 naming the step and the energies, and writes no file."""
+    import yaml
+
+    from harnesspipe.config import DEFAULT_CONFIG
+    cfg = yaml.safe_load(DEFAULT_CONFIG.read_text())
+    cfg["explicit"].update(ke_ie_fail=1e-9, energy_fail=1e-9)
+    config = tmp_path / "config.yaml"
+    config.write_text(yaml.safe_dump(cfg))
+    out = tmp_path / "out"
+    out.mkdir()
+    r = _cli("--config", str(config), "--case", "cwb19_t2_closed", "--profile", "quick",
+             "--set", "t_total=0.05", "--out", str(out / "a.csv"), "--summary", str(out / "a.json"))
     assert r.returncode == 3, r.stderr
-    assert "step" in r.stderr and "energy" in r.stderr
-    assert not any(tmp_path.iterdir())
+    assert "step" in r.stderr and "W_ext" in r.stderr and "KE/IE" in r.stderr
+    assert not any(out.iterdir())
 
 
 def test_beam_tie_carries_no_force_under_rigid_motion_and_its_moment_balances():
