@@ -297,14 +297,16 @@ class YSystem(BundleSystem):
 
     def _shell_materials(self):
         """The tube of each segment with its own case (15 mm tube on S1, 10 mm on S2, S3)."""
-        out = [np.zeros((self.mesh.shell_conn.shape[0], 6)), np.zeros(self.mesh.shell_conn.shape[0]),
-               np.zeros(self.mesh.shell_conn.shape[0])]
-        for k, seg in enumerate(self.mesh.segments):
-            inp = HifiInputs(self.cases[seg["case"]], self.inp.config, self.inp.interface,
-                             self.inp.explicit, self.inp.resolution, self.inp.coverings)
+        per_segment = [shell_materials(self.mesh, HifiInputs(
+            self.cases[seg["case"]], self.inp.config, self.inp.interface, self.inp.explicit,
+            self.inp.resolution, self.inp.coverings)) for seg in self.mesh.segments]
+        n = self.mesh.shell_conn.shape[0]
+        out = [np.zeros((n, max(m.shape[1] for m, _, _ in per_segment))), np.zeros(n), np.zeros(n)]
+        for k, (mat, thick, rho) in enumerate(per_segment):
             sel = self.mesh.shell_segment == k
-            for o, v in zip(out, shell_materials(self.mesh, inp)):
-                o[sel] = v[sel]
+            out[0][sel, :mat.shape[1]] = mat[sel]
+            out[1][sel] = thick[sel]
+            out[2][sel] = rho[sel]
         return tuple(out)
 
     def displacement(self) -> float:

@@ -28,13 +28,17 @@ from harnesspipe.fe.contact.search import (box_pairs, max_drift2, near_segment_p
                                            quad_aabbs, segment_aabbs)
 from harnesspipe.fe.contact.wire_wire import WW_POINTS
 from harnesspipe.fe.elements.shell_bt import (HOURGLASS_COEF, init_shell_state, shell_energies,
-                                              shell_lumped_mass)
+                                              shell_lumped_mass, wave_speeds2)
 from harnesspipe.fe.materials.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
 from harnesspipe.models import hifi_mesh as hm
 from harnesspipe.models.hifi_parts import Wires
 from harnesspipe.models.hifi_ties import BundleTies
+from harnesspipe.fe.elements.shell_bt_element import MAT_TUBE
+from harnesspipe.fe.materials import tube_wall
 from harnesspipe.models.tube_equivalent import from_config as tube_equivalent
+from harnesspipe.models.tube_equivalent import wall_from_config as tube_wall_from_config
+from harnesspipe.models.tube_equivalent import wall_row
 
 FAMILIES = ("internal", "contact", "friction", "pin_contact", "pin_friction", "cohesive", "damping")
 MAX_LIGHT_SCALE = 16.0   # cap of the selective shell mass scaling (the tape on its bond needs ~13)
@@ -80,35 +84,47 @@ class HifiInputs:
 
 
 def shell_materials(mesh, inp: HifiInputs):
-    """Per-element (mat row, stiffness thickness, density) of the shells (fe/shell_bt layout)."""
+    """Per-element (mat row, stiffness thickness, density) of the shells (fe/shell_bt layout).
+    The ridged tube is the isotropic J2 equivalent shell, or with ``wall_law: resultant``
+    in its covering entry the resultant law of :mod:`harnesspipe.fe.materials.tube_wall`
+    (rows of ``ROW_WIDTH``; the element thickness is then its mass thickness)."""
     cfg, f_m = inp.config, inp.explicit["f_m"]
     n = mesh.shell_conn.shape[0]
-    mat = np.zeros((n, 6))
+    cov = inp.case["covering"]
+    resultant = (mesh.shell_part == hm.PART_TUBE).any() and \
+        cfg["coverings"][cov].get("wall_law", "isotropic") == "resultant"
+    mat = np.zeros((n, tube_wall.ROW_WIDTH if resultant else 6))
     thick = np.zeros(n)
     rho = np.zeros(n)
     tape = cfg["materials"]["pvc_tape"]
     sel = mesh.shell_part == hm.PART_TAPE
-    mat[sel] = [tape["E"], tape["nu"], tape["sigma_y"], tape["K"], tape["n"], 0.0]
+    mat[sel, :6] = [tape["E"], tape["nu"], tape["sigma_y"], tape["K"], tape["n"], 0.0]
     thick[sel] = tape["thickness"]
     rho[sel] = tape["rho"]
     ends = sel & np.isin(mesh.shell_group, (hm.GROUP_END_LEFT, hm.GROUP_END_RIGHT))
     thick[ends] *= cfg["hifi"]["build"]["end_tape_layers"]      # wraps of the end bands
-    cov = inp.case["covering"]
     sel = mesh.shell_part == hm.PART_TUBE
     if sel.any():
         own = {k: inp.case[k] for k in ("d_i", "d_o") if k in inp.case}   # e.g. the 15 mm tube
         cfg_cov = {**cfg, "coverings": {**cfg["coverings"], cov: {**cfg["coverings"][cov], **own}}}
-        eq = tube_equivalent(cfg_cov, cov, inp.coverings[cov])
-        mat[sel] = [eq["E"], eq["nu"], eq["sigma_y"], eq["K"], eq["n"], 0.0]
-        thick[sel] = eq["t"]
-        rho[sel] = eq["rho"]
+        if resultant:
+            w = tube_wall_from_config(cfg_cov, cov, inp.coverings[cov])
+            mat[sel] = wall_row(w, MAT_TUBE)
+            thick[sel] = w["mass_thickness"]
+            rho[sel] = w["rho"]
+        else:
+            eq = tube_equivalent(cfg_cov, cov, inp.coverings[cov])
+            mat[sel, :6] = [eq["E"], eq["nu"], eq["sigma_y"], eq["K"], eq["n"], 0.0]
+            thick[sel] = eq["t"]
+            rho[sel] = eq["rho"]
     sel = mesh.shell_part == hm.PART_FABRIC
     if sel.any():
         fab = cfg["coverings"]["fabric_tube"]
         E1 = inp.coverings["fabric_tube"]["E"]
         E2 = inp.interface["E2_over_E1"] * E1
         nu12 = fab["nu12"]
-        mat[sel] = [E1, E2, nu12, fabric_shear_modulus(E1, E2, nu12), fab["compression_factor"], 1.0]
+        mat[sel, :6] = [E1, E2, nu12, fabric_shear_modulus(E1, E2, nu12), fab["compression_factor"],
+                        1.0]
         thick[sel] = fab["t"]
         rho[sel] = cfg["materials"][fab["material"]]["rho"]
     return mat, thick, f_m * rho
@@ -356,12 +372,7 @@ class BundleSystem(BundleTies):
         area = 0.5 * np.linalg.norm(np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1]), axis=1)
         diag = np.maximum(np.linalg.norm(p[:, 2] - p[:, 0], axis=1),
                           np.linalg.norm(p[:, 3] - p[:, 1], axis=1))
-        mat = self.smat
-        ortho = mat[:, 5] == 1.0
-        nu21 = np.where(ortho, mat[:, 2] * mat[:, 1] / mat[:, 0], mat[:, 1])
-        nu12 = np.where(ortho, mat[:, 2], mat[:, 1])
-        E = np.where(ortho, np.maximum(mat[:, 0], mat[:, 1]), mat[:, 0])
-        c2 = E / (1.0 - nu12 * nu21) / self.srho
+        c2 = wave_speeds2(self.smat, self.srho, self.sthick)
         return area / diag / np.sqrt(c2)
 
     def advance(self, du, t):

@@ -20,12 +20,15 @@ from scipy.optimize import brentq, least_squares
 from harnesspipe.models.tensile import TubeGeometry, resolution, simulate_axisymmetric_tube
 
 __all__ = ["equivalent_shell", "ridged_section", "strip_axial_stiffness", "axial_stiffness_fe",
-           "cell_membrane_law", "uniaxial_stress", "ring_ovalisation", "from_config"]
+           "cell_membrane_law", "uniaxial_stress", "ring_ovalisation", "from_config",
+           "hoop_moment_curvature", "wall_resultants", "wall_row"]
 
 RING_OVALISATION = 0.149  # diametral line load on a ring: delta = 0.149 P R^3 / (E I)
 CELL_STRAIN = 0.12        # the membrane law is fitted over |eps| <= 12 % (the wall's range in the test)
 CELL_STEPS = 48           # load steps of the cell to CELL_STRAIN (a point every 0.25 %)
 CELL_MERIDIAN = 32        # elements on the cell's half-pitch meridian (the tensile stage's default)
+HOOP_STRAIN = 0.12        # the hoop moment-curvature law is fitted up to this strain at the crest fibre
+HOOP_POINTS = 48          # curvatures of that fit
 
 
 def ridged_section(geometry: TubeGeometry = TubeGeometry(), n: int = 4001) -> dict:
@@ -227,3 +230,133 @@ def from_config(config: dict, covering: str, material: dict) -> dict:
     mat = config["materials"][cov["material"]]
     return equivalent_shell(material["E"], material["sigma_y"], material["K"], material["n"], geom,
                             nu=mat.get("nu", 0.42), rho=mat.get("rho"))
+
+
+def _wall_cells(geometry: TubeGeometry, n_arc: int = 1201, n_thick: int = 12):
+    """Cells of the ridged wall region over one pitch: centroid distance ``v = r - R`` from
+    the mean mid radius and area (n_cells,), from a grid of the offset curves
+    mid + s normal, s in [-t/2, t/2] (each cell's area from its diagonals)."""
+    z = np.linspace(0.0, geometry.pitch, n_arc)
+    r = geometry.radius(z)
+    drdz = geometry.slope(z)
+    ds = np.sqrt(1.0 + drdz ** 2)
+    normal = np.column_stack([-drdz / ds, 1.0 / ds])
+    s = np.linspace(-0.5 * geometry.wall, 0.5 * geometry.wall, n_thick + 1)
+    P = np.column_stack([z, r])[:, None, :] + s[None, :, None] * normal[:, None, :]
+    d1 = P[1:, 1:] - P[:-1, :-1]
+    d2 = P[:-1, 1:] - P[1:, :-1]
+    area = 0.5 * np.abs(d1[..., 0] * d2[..., 1] - d1[..., 1] * d2[..., 0])
+    v = 0.25 * (P[1:, 1:, 1] + P[:-1, :-1, 1] + P[:-1, 1:, 1] + P[1:, :-1, 1])
+    return (v - 0.5 * sum(geometry.mid_radii)).ravel(), area.ravel()
+
+
+def hoop_moment_curvature(E: float, sigma_y: float, K: float, n: float,
+                          geometry: TubeGeometry = TubeGeometry(), strain: float = HOOP_STRAIN,
+                          n_points: int = HOOP_POINTS):
+    """Hoop bending moment per unit axial length M(kappa) (N mm/mm) of the ridged wall
+    section under a change of ring curvature ``kappa`` (1/mm): the fibre at ``v = r - R``
+    strains ``kappa v`` (plane sections of the ring wall) and carries the uniaxial eq. 2
+    stress of the material, M = (1/p) integral sigma v dA.  Returns ``kappa`` (n_points +
+    1,) up to the curvature at which the crest fibre reaches ``strain``, and ``M``."""
+    v, dA = _wall_cells(geometry)
+    kappa = np.linspace(0.0, strain / np.max(np.abs(v)), n_points + 1)
+    eps_table = np.linspace(0.0, strain * 1.001, 4001)
+    sig_table = uniaxial_stress(eps_table, E, sigma_y, K, n)
+    M = np.array([np.sum(np.sign(v) * np.interp(np.abs(k * v), eps_table, sig_table) * v * dA)
+                  for k in kappa]) / geometry.pitch
+    return kappa, M
+
+
+def flow_table(x, y, k: float, n_tab: int) -> tuple[np.ndarray, np.ndarray]:
+    """Piecewise-linear flow table (alpha_j, H_j), n_tab points, of a monotonic loading
+    curve ``y(x)`` (x from 0) for a 1D elastoplastic law with unloading stiffness ``k``
+    (at least the curve's steepest tangent): alpha = x - y / k.  The table starts at the
+    curve's last point with alpha = 0 (the elastic limit; (0, 0) if there is none) and
+    samples the rest quadratically in x (dense at the knee, where eq. 2's slope is
+    steepest), so that monotonic loading of the law reproduces the curve's linear
+    interpolation through those points."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    alpha = x - y / k
+    if np.any(np.diff(alpha) < -1e-12 * x[-1]):
+        raise ValueError("flow_table: the curve is steeper than the unloading stiffness")
+    i0 = int(np.flatnonzero(alpha <= 1e-9 * x[-1]).max())
+    xs = x[i0] + (x[-1] - x[i0]) * np.linspace(0.0, 1.0, n_tab) ** 2   # dense at the knee
+    ys = np.interp(xs, x, y)
+    a = np.maximum(xs - ys / k, 0.0)
+    a[0] = 0.0
+    return a, ys
+
+
+def wall_resultants(E: float, sigma_y: float, K: float, n: float,
+                    geometry: TubeGeometry = TubeGeometry(), *, nu: float = 0.42) -> dict:
+    """Resultant stiffnesses and flow tables of the ridged wall for the shell law of
+    :mod:`harnesspipe.fe.materials.tube_wall` (docs/theory/tube_equivalent.md), per unit
+    length of the mean cylinder (radius ``R``):
+
+    * ``k_ax`` the axial membrane stiffness of the ridged cell (:func:`axial_stiffness_fe`);
+      ``tension`` and ``compression``: flow tables (:func:`flow_table`) of the cell's
+      N_t and N_c (:func:`cell_membrane_law`) against the logarithmic strain (the shell
+      integrates its strain rate: ln(1 + eps) of the cell's extension / gauge), at the
+      unloading stiffness ``k_e`` (k_ax, or the cell's steepest tangent if larger: in
+      tension the straightening ridges stiffen the wall by up to ~10 % before it yields);
+    * ``k_h = E A_w`` the hoop membrane stiffness (A_w the wall area per unit length) and
+      ``k_s = G t / arc`` the in-plane shear stiffness of the corrugated wall (its shear
+      flow runs along the arc);
+    * ``D_h = E I_w`` the hoop bending stiffness and ``hoop``: the flow table of
+      :func:`hoop_moment_curvature`;
+    * ``D_x = E t^3 / (12 arc)`` the wall's own bending along the axis (the corrugated
+      wall bends across its ridges through the wall alone: compliance ds / (E I));
+    * ``kGt = 5/6 G t`` its transverse shear stiffness; ``mass_thickness = A_w``
+      (the shell's thickness: mass per area rho A_w);
+    * ``cell``: the cell's (eps, N_t, N_c) and ``hoop_curve`` the section's (kappa, M),
+      the references the law is checked against.
+    """
+    from harnesspipe.fe.materials.tube_wall import N_TAB
+    if not (E > 0 and sigma_y >= 0 and K >= 0 and n > 0):
+        raise ValueError(f"invalid tube material: E={E}, sigma_y={sigma_y}, K={K}, n={n}")
+    sec = ridged_section(geometry)
+    G = E / (2.0 * (1.0 + nu))
+    k_ax = axial_stiffness_fe(E, nu, geometry)
+    eps, N_t, N_c = cell_membrane_law(float(E), float(sigma_y), float(K), float(n), float(nu),
+                                      geometry)
+    tangent = max(np.max(np.diff(N_t) / np.diff(np.log1p(eps))),
+                  np.max(np.diff(N_c) / np.diff(-np.log1p(-eps))))
+    k_e = max(k_ax, 1.02 * tangent)
+    kappa, M = hoop_moment_curvature(E, sigma_y, K, n, geometry)
+    v, dA = _wall_cells(geometry)
+    D_h = float(E * np.sum(v * v * dA) / geometry.pitch)   # E I_w of the same cells (I: 0.03 %)
+    return {"k_ax": float(k_ax), "k_e": float(k_e), "k_h": float(E * sec["area"]),
+            "k_s": float(G * geometry.wall / sec["arc_factor"]), "D_h": D_h,
+            "D_x": float(E * geometry.wall ** 3 / 12.0 / sec["arc_factor"]),
+            "kGt": float(5.0 / 6.0 * G * geometry.wall), "mass_thickness": float(sec["area"]),
+            "radius": sec["radius"], "t_contact": sec["t_contact"],
+            "tension": flow_table(np.log1p(eps), N_t, k_e, N_TAB),
+            "compression": flow_table(-np.log1p(-eps), N_c, k_e, N_TAB),
+            "hoop": flow_table(kappa, M, D_h, N_TAB),
+            "cell": (eps, N_t, N_c), "hoop_curve": (kappa, M)}
+
+
+def wall_row(w: dict, kind: float) -> np.ndarray:
+    """The shell material row (fe.materials.tube_wall layout, material kind ``kind`` at
+    index 5) of :func:`wall_resultants` ``w``."""
+    from harnesspipe.fe.materials import tube_wall as tw
+    row = np.zeros(tw.ROW_WIDTH)
+    row[[tw.W_KE, tw.W_DH, tw.W_DX, tw.W_KH, tw.W_KS, tw.W_KGT]] = [
+        w["k_e"], w["D_h"], w["D_x"], w["k_h"], w["k_s"], w["kGt"]]
+    row[5] = kind
+    for o, key in ((tw.TAB_TENSION, "tension"), (tw.TAB_COMPRESSION, "compression"),
+                   (tw.TAB_HOOP, "hoop")):
+        row[o:o + tw.N_TAB], row[o + tw.N_TAB:o + 2 * tw.N_TAB] = w[key]
+    return row
+
+
+def wall_from_config(config: dict, covering: str, material: dict) -> dict:
+    """:func:`wall_resultants` of a ``coverings`` entry (as :func:`from_config`), with the
+    material density ``rho``."""
+    cov = config["coverings"][covering]
+    geom = TubeGeometry(d_inner=cov["d_i"], d_outer=cov["d_o"], wall=cov["t"], pitch=cov["pitch"])
+    mat = config["materials"][cov["material"]]
+    out = wall_resultants(material["E"], material["sigma_y"], material["K"], material["n"], geom,
+                          nu=mat.get("nu", 0.42))
+    out["rho"] = float(mat["rho"])
+    return out

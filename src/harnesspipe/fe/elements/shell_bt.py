@@ -17,8 +17,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from harnesspipe.fe.materials.tube_wall import W_KE, W_KH, W_KS
+
 from harnesspipe.fe.elements.shell_bt_element import (  # noqa: F401 -- layout re-exported
-    MAT_J2, MAT_KIND, MAT_ORTHOTROPIC, N_STATE, N_THICKNESS, PT_EPS, PT_MAT, PT_SA, PT_SIG,
+    MAT_J2, MAT_KIND, MAT_ORTHOTROPIC, MAT_TUBE, N_STATE, N_THICKNESS, PT_EPS, PT_MAT, PT_SA, PT_SIG,
     PT_SIZE, S_GXZ, S_GYZ, S_HG, S_MCOS, S_MSIN, S_THICK, S_W_HG, S_W_INT, S_W_PLASTIC,
     SHEAR_CORRECTION, ZETA, ZETA_W, element_forces, frame, work_arrays)
 
@@ -114,12 +116,23 @@ def shell_lumped_mass(X, conn, thick, rho, out):
 
 
 @njit(cache=True)
-def wave_speed2(me, rho):
-    """c^2 = max(D11, D22) / rho (plane-stress plate wave speed)."""
+def wave_speed2(me, rho, h):
+    """c^2 = max(D11, D22) / rho (plane-stress plate wave speed); for a tube-wall row
+    (resultants) the largest membrane stiffness over the mass per area, max(k_e, k_h,
+    k_s) / (rho h)."""
+    if me.shape[0] > MAT_KIND and me[MAT_KIND] == MAT_TUBE:
+        return max(me[W_KE], me[W_KH], me[W_KS]) / (rho * h)
     if me.shape[0] > MAT_KIND and me[MAT_KIND] == MAT_ORTHOTROPIC:
         nu21 = me[2] * me[1] / me[0]
         return max(me[0], me[1]) / (1.0 - me[2] * nu21) / rho
     return me[0] / (1.0 - me[1] * me[1]) / rho
+
+
+def wave_speeds2(mat, rho, thick) -> np.ndarray:
+    """:func:`wave_speed2` of every row of ``mat`` (n_el, k) with ``rho``, ``thick`` (n_el,)."""
+    mat = np.ascontiguousarray(mat, dtype=float)
+    return np.array([wave_speed2(mat[e], float(rho[e]), float(thick[e]))
+                     for e in range(mat.shape[0])])
 
 
 @njit(cache=True)
@@ -129,7 +142,7 @@ def shell_stable_step(x, conn, thick, mat, rho):
     dt = np.inf
     for e in range(conn.shape[0]):
         area, dmax = _area_diag(x, conn[e, 0], conn[e, 1], conn[e, 2], conn[e, 3])
-        d = (area / dmax) / np.sqrt(wave_speed2(mat[e], rho[e]))
+        d = (area / dmax) / np.sqrt(wave_speed2(mat[e], rho[e], thick[e]))
         if d < dt:
             dt = d
     return dt

@@ -2,9 +2,10 @@
 :mod:`harnesspipe.fe.elements.shell_bt`.  Co-rotational frame from the current nodes,
 one-point (centroid) velocity strains of a Mindlin field, a total co-rotational strain per
 thickness point (5 Gauss points) driving the J2 (eqs. 1-2) or the orthotropic (eq. 12)
-plane-stress kernels, elastic transverse shear (kappa = 5/6), Belytschko-Tsay stiffness
-hourglass control, nodal forces from the virtual power; internal, plastic and hourglass
-work per element.
+plane-stress kernels -- or, for the ridged tube's wall, resultants straight from the
+membrane strains and curvatures (:mod:`harnesspipe.fe.materials.tube_wall`) --, elastic
+transverse shear (kappa = 5/6), Belytschko-Tsay stiffness hourglass control, nodal forces
+from the virtual power; internal, plastic and hourglass work per element.
 
 Theory (the kinematics, the constitutive update, the hourglass rates and stiffnesses, the
 energies, with their equations): docs/theory/shell_blt.md.
@@ -19,6 +20,8 @@ from numba import njit
 from harnesspipe.fe.materials.plane_stress import (EPS33, P11, P12, P22, P33, STATE_SIZE,
                                                    j2_plane_stress_from, orthotropic_plane_stress,
                                                    orthotropic_plane_stress_stiffness)
+from harnesspipe.fe.materials.tube_wall import (T_SIZE, W_DH, W_DX, W_KE, W_KGT, W_KH,
+                                                tube_wall_resultants)
 
 N_THICKNESS = 5
 _ZETA, _ZETA_W = np.polynomial.legendre.leggauss(N_THICKNESS)
@@ -26,7 +29,7 @@ ZETA = tuple(float(z) for z in _ZETA)      # tuples: compile-time constants (cac
 ZETA_W = tuple(float(w) for w in _ZETA_W)
 SHEAR_CORRECTION = 5.0 / 6.0
 MAT_KIND = 5
-MAT_J2, MAT_ORTHOTROPIC = 0, 1
+MAT_J2, MAT_ORTHOTROPIC, MAT_TUBE = 0, 1, 2
 MAT_COMPRESSION = 4   # eq. 12 rows (E1, E2, nu12, G12, r_c, MAT_ORTHOTROPIC): the yarns' compression factor
 
 # --- state layout (per element, N_STATE floats) ------------------------------------
@@ -295,15 +298,32 @@ def _transverse_shear(st, dt, ks, h_old, h, g_rate):
 
 
 @njit(cache=True, inline="always")
-def _hourglass_forces(st, dt, hg, E_hg, ks, h, area, bb, q):
+def _hourglass_stiffness(hg, E_hg, ks, h, area, bb):
+    """Belytschko-Tsay hourglass stiffnesses (BLM 9.6) of a plane-stress section:
+    membrane r_m = r_hg E h A BB / 8, bending r_b = r_hg E h^3 A BB / 192, w-mode
+    r_w = r_hg kappa G h^3 BB / 12."""
+    return (hg * E_hg * h * area * bb / 8.0, hg * E_hg * h * h * h * area * bb / 192.0,
+            hg * ks * h * h * h * bb / 12.0)
+
+
+@njit(cache=True, inline="always")
+def _hourglass_stiffness_resultant(hg, me, area, bb):
+    """The same stiffnesses for a section given by its resultant stiffnesses (the tube
+    wall's row): membrane ``Eh`` the largest of k_e, k_h, bending ``D = E h^3/12`` the
+    largest of D_h, D_x, and ``h^2 = 12 D / Eh`` in the w-mode."""
+    Eh = max(me[W_KE], me[W_KH])
+    D = max(me[W_DH], me[W_DX])
+    return hg * Eh * area * bb / 8.0, hg * D * area * bb / 16.0, hg * me[W_KGT] * D * bb / Eh
+
+
+@njit(cache=True, inline="always")
+def _hourglass_forces(st, dt, r, q):
     """Belytschko-Tsay stiffness hourglass control (BLM 9.6): the five hourglass forces
-    ``Q_i <- Q_i + dt r_i q'_i`` in the state ``st`` (membrane r_m = r_hg E h A BB / 8,
-    bending r_b = r_hg E h^3 A BB / 192, w-mode r_w = r_hg kappa G h^3 BB / 12) for the
-    rates ``q`` (5,); returns the new forces and their work over the step."""
+    ``Q_i <- Q_i + dt r_i q'_i`` in the state ``st`` for the stiffnesses ``r`` = (r_m,
+    r_b, r_w) and the rates ``q`` (5,); returns the new forces and their work over the
+    step."""
     q0, q1, q2, q3, q4 = q
-    r_m = hg * E_hg * h * area * bb / 8.0
-    r_b = hg * E_hg * h * h * h * area * bb / 192.0
-    r_w = hg * ks * h * h * h * bb / 12.0
+    r_m, r_b, r_w = r
     o = S_HG
     hg_old0, hg_old1, hg_old2, hg_old3, hg_old4 = st[o], st[o + 1], st[o + 2], st[o + 3], st[o + 4]
     st[o] += dt * r_m * q0
@@ -356,7 +376,7 @@ def element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, ef, loc, Dm, 
     """Stress update over ``dt`` and nodal forces of element ``e``: writes ``f_el[e]``
     (4, 6), updates ``state[e]`` (N_STATE,).  ``x`` (n_nodes, 3) positions, ``v``
     (n_nodes, 6) half-step velocities, ``conn`` (n_el, 4), ``thick`` (n_el,) initial
-    thicknesses, ``mat`` (n_el, 5 or 6) material rows, ``hg`` the hourglass coefficient;
+    thicknesses, ``mat`` (n_el, 5 or more) material rows, ``hg`` the hourglass coefficient;
     scratch ``ef .. w44`` the fields of a :class:`Work` (separate arrays: a tuple passed
     into the element loop costs reference counting per element)."""
     _local_nodes(e, x, v, conn, ef, loc)
@@ -365,6 +385,9 @@ def element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, ef, loc, Dm, 
     q = _hourglass_rates(loc)
     st = state[e]
     me = mat[e]
+    if me.shape[0] > MAT_KIND and me[MAT_KIND] == MAT_TUBE:
+        _tube_element(e, st, me, dt, hg, area, bb, d_m, kappa, g_rate, q, f_el, ef, loc)
+        return
     h_old = st[S_THICK]
     ortho = me.shape[0] > MAT_KIND and me[MAT_KIND] == MAT_ORTHOTROPIC
     E_hg, G, c_ps, nu_r = _moduli(ortho, me[0], me[1], me[3])
@@ -382,6 +405,23 @@ def element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, ef, loc, Dm, 
     M = (m_sum[0] * c_m, m_sum[1] * c_m, m_sum[2] * c_m)
     ks = SHEAR_CORRECTION * G
     Q_old, Q = _transverse_shear(st, dt, ks, h_old, h, g_rate)
-    H, w_hg = _hourglass_forces(st, dt, hg, E_hg, ks, h, area, bb, q)
+    H, w_hg = _hourglass_forces(st, dt, _hourglass_stiffness(hg, E_hg, ks, h, area, bb), q)
     _add_work(st, dt, area, h, pw, wp, w_hg, Q_old, Q, g_rate)
+    _nodal_forces(e, f_el, ef, loc, area, N, M, Q, H)
+
+
+@njit(cache=True, inline="always")
+def _tube_element(e, st, me, dt, hg, area, bb, d_m, kappa, g_rate, q, f_el, ef, loc):
+    """:func:`element_forces` of a ridged-tube wall element (``MAT_TUBE``): resultants from
+    :func:`harnesspipe.fe.materials.tube_wall.tube_wall_resultants` in the state's first
+    ``T_SIZE`` slots, transverse shear ``kGt gamma``, no thickness change (the element's
+    thickness is its mass thickness only)."""
+    h = st[S_THICK]
+    N, M, w, wp = tube_wall_resultants(st[:T_SIZE], me, st[S_MCOS], st[S_MSIN], dt, d_m, kappa)
+    Q_old, Q = _transverse_shear(st, dt, me[W_KGT] / h, h, h, g_rate)
+    H, w_hg = _hourglass_forces(st, dt, _hourglass_stiffness_resultant(hg, me, area, bb), q)
+    st[S_W_PLASTIC] += area * wp
+    st[S_W_HG] += w_hg
+    st[S_W_INT] += area * (w + 0.5 * dt * ((Q_old[0] + Q[0]) * g_rate[0]
+                                           + (Q_old[1] + Q[1]) * g_rate[1])) + w_hg
     _nodal_forces(e, f_el, ef, loc, area, N, M, Q, H)
