@@ -102,10 +102,9 @@ def read_table(path, config: dict, config_name: str = "config"
 
 
 def _number(row, column: str, where: str) -> float:
+    """A value of eq. 2's columns, checked by the shared validator (finite, in range)."""
     value = row[column]
     bad = problem(column, value)
-    if bad is None and isinstance(value, float) and math.isnan(value):
-        bad = "expected a number"
     if bad:
         raise TableError(f"{where}: {column} = {value!r}: {bad}")
     return float(value)
