@@ -190,6 +190,15 @@ def test_radius_density_and_nu_sources(config, tmp_path):
     assert _card_lines(mat, "*BEAM SECTION")[0] == "6"
 
 
+def test_campaign_test_geometry_sets_the_three_point_deck(config, tmp_path):
+    table = _table3_csv(config, tmp_path / "t.csv", ["cwb19_t2_closed"],
+                        (",span,deflection", {"cwb19_t2_closed": ",100,20"}))
+    (folder,) = write_cards(table, "calculix", tmp_path / "cx", config=config)
+    deck = (folder / "three_point.inp").read_text()
+    assert "\n41, 100, 0.0, 0.0\n" in deck and "LOAD, 2, 2, -20\n" in deck
+    assert "| span | 100 | mm | t.csv, column span |" in (folder / "README.md").read_text()
+
+
 def test_campaign_rows_not_ok_are_skipped_with_a_note(config, tmp_path, capsys):
     table = tmp_path / "properties.csv"
     table.write_text("case,E,sigma_y,K,n,r_o,rho,status\n"
@@ -214,7 +223,11 @@ def _cli(*args):
 
 @pytest.mark.parametrize("content, fmt, message", [
     ("case,E,sigma_y,n\ncwb19_t2_closed,15.7,0.6,0.3\n", "calculix",
-     "{t}: missing column K (expected columns case, E, sigma_y, K, n, optional r_o, nu, rho, status)"),
+     "{t}: missing column K (expected columns case, E, sigma_y, K, n, optional r_o, nu, rho, span, "
+     "deflection, status)"),
+    ("case,E,sigma_y,K,n,span,deflection\ncwb19_t2_closed,15.7,0.6,1.59,0.3,100,50\n", "calculix",
+     "{t}: line 2 (case cwb19_t2_closed): deflection = 50: expected a deflection below half the "
+     "100 mm span (< 50 mm)"),
     ("case,E,sigma_y,K,n\ncwb19_t2_closed,15.7,0.6,1.59,0.3\ncwb19_t2_fabric,0,0.25,5.65,0.24\n",
      "lsdyna", "{t}: line 3 (case cwb19_t2_fabric): E = 0.0: expected a modulus [MPa] > 0"),
     ("case,E,sigma_y,K,n\nnew_bundle,15.7,0.6,1.59,0.3\n", "abaqus",

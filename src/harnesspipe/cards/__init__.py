@@ -33,8 +33,8 @@ __all__ = ["FORMATS", "BeamProperties", "TableError", "effective_density", "read
 def write_cards(table, fmt: str, out, config=None, log=print) -> list[Path]:
     """Write the cards of every ``ok`` row of ``table`` (a CSV path) in format ``fmt`` to
     ``out``; returns the case folders.  ``config``: a config dict or file (default: the
-    repository's config/config.yaml), the source of r_o and rho where the table has none
-    and of the test's span and deflection.  ``log`` receives the notes on skipped rows."""
+    repository's config/config.yaml), the source of r_o, rho and the test's span and
+    deflection where the table has none.  ``log`` receives the notes on skipped rows."""
     from harnesspipe import config as config_module
     if fmt not in FORMATS:
         raise TableError(f"format {fmt!r}: expected one of {', '.join(FORMATS)}")
@@ -50,12 +50,11 @@ def write_cards(table, fmt: str, out, config=None, log=print) -> list[Path]:
     for case, note in zip(skipped, notes):
         log(note)
         _remove_stale(out / case)
-    tp = config["three_point"]
     folders = []
     for part_id, p in enumerate(rows, start=1):
         folder = out / p.case
-        files = _cards(p, fmt, part_id, tp["span"], tp["deflection"])
-        files["README.md"] = case_readme(p, fmt, Path(table), config_name, tp, part_id)
+        files = _cards(p, fmt, part_id)
+        files["README.md"] = case_readme(p, fmt, Path(table), part_id)
         for name, text in files.items():
             _write(folder / name, text)
         folders.append(folder)
@@ -63,11 +62,11 @@ def write_cards(table, fmt: str, out, config=None, log=print) -> list[Path]:
     return folders
 
 
-def _cards(p: BeamProperties, fmt: str, part_id: int, span: float, deflection: float) -> dict:
+def _cards(p: BeamProperties, fmt: str, part_id: int) -> dict:
     if fmt == "lsdyna":
         return {"material.k": lsdyna.material_k(p, part_id)}
     return {"material.inp": keyword.material_inp(p, fmt),
-            "three_point.inp": keyword.three_point_inp(p, fmt, span, deflection)}
+            "three_point.inp": keyword.three_point_inp(p, fmt, p.span, p.deflection)}
 
 
 def _write(path: Path, text: str) -> None:
@@ -86,8 +85,7 @@ def _remove_stale(folder: Path) -> None:
         folder.rmdir()
 
 
-def case_readme(p: BeamProperties, fmt: str, table: Path, config_name: str, tp: dict,
-                part_id: int) -> str:
+def case_readme(p: BeamProperties, fmt: str, table: Path, part_id: int) -> str:
     """README.md of one case folder: what each file holds, every number and its source."""
     eps, _ = tabulate(p.sigma_y, p.K, p.n)
     rows = [("E", f"{p.E:.6g}", "MPa", p.sources["E"]),
@@ -98,9 +96,8 @@ def case_readme(p: BeamProperties, fmt: str, table: Path, config_name: str, tp: 
             ("nu", f"{p.nu:.6g}", "-", p.sources["nu"]),
             ("rho", f"{p.rho:.6g}", "t/mm^3", p.sources["rho"])]
     if fmt != "lsdyna":
-        rows += [("span", f"{tp['span']:g}", "mm", f"{config_name}: three_point.span (Sec. 2.2)"),
-                 ("deflection", f"{tp['deflection']:g}", "mm",
-                  f"{config_name}: three_point.deflection (Sec. 2.2)")]
+        rows += [("span", f"{p.span:g}", "mm", p.sources["span"]),
+                 ("deflection", f"{p.deflection:g}", "mm", p.sources["deflection"])]
     lines = [f"# {SOLVER_NAMES[fmt]} cards of {p.case}", "",
              f"The effective beam of `{p.case}` (reduced-order model, Sec. 4.3 of the paper), "
              f"written by `harnesspipe cards --format {fmt}` from `{table}`.  Units: mm, t, s, "

@@ -14,7 +14,9 @@ A table is ``results/rom/table3.csv`` (``case,E,sigma_y,K,n,reference``) or a ca
   section, sum_i N_i rho_i (d_outer,i / 2)^2 / r_o^2 from the case's ``wires`` and config
   ``materials`` -- the lumped mass of the branch ROM (:mod:`harnesspipe.models.branch`),
   which leaves the covering and tape out (the closed tube's 0.27 mm wall, counted flat,
-  would add about 7 %).
+  would add about 7 %);
+* span, deflection of the three-point deck (mm): ``span`` and ``deflection`` columns (a
+  campaign's test geometry) when present, else the config's ``three_point``.
 
 Rows whose ``status`` is not ``ok`` are skipped (a note names them); every other row must
 be complete and physical, or :class:`TableError` names the file, row, case and column.
@@ -30,7 +32,7 @@ import pandas as pd
 
 from harnesspipe.models.rom_beam import Material
 from harnesspipe.stages import chain_settings as chain
-from harnesspipe.validate import problem
+from harnesspipe.validate import deflection_problem, problem
 
 REQUIRED = ("case", "E", "sigma_y", "K", "n")
 CASE_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,63}$")   # a folder and a solver label
@@ -51,6 +53,8 @@ class BeamProperties:
     r_o: float
     nu: float
     rho: float
+    span: float            # of the three-point test the deck reproduces
+    deflection: float
     sources: dict          # quantity -> where its value came from (README)
 
     @property
@@ -80,7 +84,8 @@ def read_table(path, config: dict, config_name: str = "config"
     missing = [c for c in REQUIRED if c not in frame.columns]
     if missing:
         raise TableError(f"{path}: missing column {', '.join(missing)} "
-                         f"(expected columns {', '.join(REQUIRED)}, optional r_o, nu, rho, status)")
+                         f"(expected columns {', '.join(REQUIRED)}, optional {', '.join(OPTIONAL)}, "
+                         "status)")
     rows, skipped, seen = [], {}, set()
     for i, row in frame.iterrows():
         where = f"{path}: line {i + 2}"              # the header is line 1
@@ -142,13 +147,26 @@ def _properties(row, case: str, where: str, path: Path, config: dict,
                           f"d_outer) smeared over pi r_o^2, as the branch ROM's lumped mass")
     else:
         raise TableError(f"{where}: no rho column and no case {case!r} in {config_name} "
-                         "(cases, hifi.extra_cases): the density is unknown")
-    return BeamProperties(case=case, r_o=r_o, nu=nu, rho=rho, sources=sources, **law)
+                         "(cases, hifi.extra_cases): the density is unknown (add a rho column, "
+                         "t/mm^3, e.g. harnesspipe.cards.effective_density)")
+    test = {}
+    for key in ("span", "deflection"):
+        test[key] = _optional(row, key, where)
+        if test[key] is None:
+            test[key] = float(config["three_point"][key])
+            sources[key] = f"{config_name}: three_point.{key} (Sec. 2.2)"
+        else:
+            sources[key] = f"{path.name}, column {key}"
+    bad = deflection_problem(test["deflection"], test["span"])
+    if bad:
+        raise TableError(f"{where}: deflection = {test['deflection']:g}: {bad}")
+    return BeamProperties(case=case, r_o=r_o, nu=nu, rho=rho, sources=sources, **law, **test)
 
 
 #: optional columns: (upper bound or None, what is expected)
 OPTIONAL = {"r_o": (None, "a radius [mm] > 0"), "nu": (0.5, "a Poisson ratio in (0, 0.5)"),
-            "rho": (None, "a density [t/mm^3] > 0")}
+            "rho": (None, "a density [t/mm^3] > 0"), "span": (None, "a span [mm] > 0"),
+            "deflection": (None, "a deflection [mm] > 0")}
 
 
 def _optional(row, column: str, where: str) -> float | None:

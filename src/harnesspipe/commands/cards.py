@@ -11,14 +11,15 @@ def register(sub) -> None:
                                    "or a campaign's properties.csv), the solver cards of its "
                                    "effective beam and a README giving every number's source.")
     p.add_argument("--table", type=Path, required=True,
-                   help="CSV with columns case,E,sigma_y,K,n (optional r_o, nu, rho, status)")
+                   help="CSV with columns case,E,sigma_y,K,n (optional r_o, nu, rho, span, "
+                        "deflection, status)")
     p.add_argument("--format", dest="fmt", required=True, metavar="|".join(FORMATS),
                    help="solver: calculix and abaqus write material.inp and three_point.inp, "
                         "lsdyna material.k")
     p.add_argument("--out", type=Path, required=True, help="folder; one sub-folder per case")
     p.add_argument("--config", type=Path, default=None,
-                   help="config file for r_o and rho of cases the table lacks them for, and "
-                        "the test geometry (default: the repository's config/config.yaml)")
+                   help="config file for r_o, rho and the test geometry where the table has "
+                        "none (default: the repository's config/config.yaml)")
     p.set_defaults(func=_cards)
 
 
