@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import os
 import platform
-import shutil
 import subprocess
 import tempfile
 import time
@@ -49,11 +48,16 @@ def compare(case: str, law: dict, r_o: float, u, F) -> str:
     return " | ".join(cells)
 
 
+def ccx_version() -> str:
+    out = subprocess.run(["ccx", "-v"], capture_output=True, text=True).stdout
+    return " ".join(out.split()[-2:]) if "Version" in out else "unknown version"
+
+
 def main() -> None:
     config = yaml.safe_load(CONFIG.read_text())
     lines = [HEADING, "",
              f"`bench/bench_cards_ccx.py`, {time.strftime('%Y-%m-%d')}, {platform.machine()}, "
-             f"{shutil.which('ccx')}, one thread.  Mid-span force ccx / pinned ROM [N] "
+             f"ccx {ccx_version()}, one thread.  Mid-span force ccx / pinned ROM [N] "
              "(deviation) of the exported `three_point.inp` (20 B32 elements) at the paper's "
              "Table 3 values (config `paper.table3`, r_o from `cases`).", "",
              "| case | 5 mm | 10 mm | 20 mm | 30 mm | ccx wall [s] | increments |",

@@ -82,6 +82,8 @@ def three_point_inp(p: BeamProperties, fmt: str, span: float, deflection: float,
     lines = [f"** Three-point bending of {p.case}: span {span:g} mm, pinned supports (node 1 "
              f"pinned, node {last} slides along x), {deflection:g} mm at mid-span (node {mid}).",
              *units_header(fmt),
+             f"** The beam (material.inp): E {p.E:g} MPa, nu {p.nu:g}, rho {p.rho:.6g} t/mm^3, "
+             f"eq. 2 sigma = {p.sigma_y:g} + {p.K:g} eps_p^{p.n:g} MPa, r_o {p.r_o:g} mm.",
              "*HEADING", f"{p.case}: three-point bending at ideal supports (harnesspipe cards)",
              "*NODE, NSET=NALL",
              *(f"{i}, {_fmt(x)}, 0.0, 0.0" for i, x in enumerate(nodes, start=1)),
