@@ -245,6 +245,16 @@ def test_bad_input_exits_2_with_one_line(tmp_path, content, fmt, message):
     assert not (tmp_path / "out").exists()
 
 
+def test_parser_names_the_formats_without_importing_model_code():
+    from harnesspipe.cards import FORMATS
+    from harnesspipe.commands import cards as command
+    assert command.FORMAT_CHOICES == "|".join(FORMATS)
+    probe = subprocess.run([sys.executable, "-c", "import sys, harnesspipe.cli as c; c.build_parser(); "
+                            "print('harnesspipe.cards' in sys.modules, 'numba' in sys.modules)"],
+                           capture_output=True, text=True, check=True)
+    assert probe.stdout.split() == ["False", "False"]
+
+
 def test_missing_table_file_exits_2(tmp_path):
     code, _, err = _cli("--table", tmp_path / "none.csv", "--format", "calculix",
                         "--out", tmp_path / "out")

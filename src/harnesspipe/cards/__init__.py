@@ -126,9 +126,9 @@ def case_readme(p: BeamProperties, fmt: str, table: Path, part_id: int) -> str:
                   "every increment.  The force should match `harnesspipe rom three-point "
                   "--supports pinned` with the values above."]
         if fmt == "calculix":
-            lines += ["", "Run: `ccx -i three_point` (writes three_point.dat)."]
+            lines += ["", "Run in this folder: `ccx -i three_point` (writes three_point.dat)."]
         else:
-            lines += ["", "Run: `abaqus job=three_point`.  Not run in Abaqus here; the "
+            lines += ["", "Run in this folder: `abaqus job=three_point`.  Not run in Abaqus here; the "
                       "CalculiX deck of the same beam is tested against the ROM."]
     return "\n".join(lines) + "\n"
 

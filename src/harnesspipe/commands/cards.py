@@ -4,8 +4,11 @@ from __future__ import annotations
 from pathlib import Path
 
 
+FORMAT_CHOICES = "calculix|abaqus|lsdyna"   # harnesspipe.cards.FORMATS, named here so that
+                                             # building the parser imports no model code
+
+
 def register(sub) -> None:
-    from harnesspipe.cards import FORMATS
     p = sub.add_parser("cards", help="CalculiX/Abaqus/LS-DYNA cards of effective beams",
                        description="Write, per case of a property table (results/rom/table3.csv "
                                    "or a campaign's properties.csv), the solver cards of its "
@@ -13,7 +16,7 @@ def register(sub) -> None:
     p.add_argument("--table", type=Path, required=True,
                    help="CSV with columns case,E,sigma_y,K,n (optional r_o, nu, rho, span, "
                         "deflection, status)")
-    p.add_argument("--format", dest="fmt", required=True, metavar="|".join(FORMATS),
+    p.add_argument("--format", dest="fmt", required=True, metavar=FORMAT_CHOICES,
                    help="solver: calculix and abaqus write material.inp and three_point.inp, "
                         "lsdyna material.k")
     p.add_argument("--out", type=Path, required=True, help="folder; one sub-folder per case")
