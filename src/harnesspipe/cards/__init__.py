@@ -50,16 +50,14 @@ def write_cards(table, fmt: str, out, config=None, log=print) -> list[Path]:
     for case, note in zip(skipped, notes):
         log(note)
         _remove_stale(out / case)
-    folders = []
+    files = {}                            # every text first: an error writes nothing
     for part_id, p in enumerate(rows, start=1):
-        folder = out / p.case
-        files = _cards(p, fmt, part_id)
-        files["README.md"] = case_readme(p, fmt, Path(table), part_id)
-        for name, text in files.items():
-            _write(folder / name, text)
-        folders.append(folder)
-    _write(out / "README.md", index_readme(rows, notes, fmt, Path(table)))
-    return folders
+        cards = {**_cards(p, fmt, part_id), "README.md": case_readme(p, fmt, Path(table), part_id)}
+        files.update({out / p.case / name: text for name, text in cards.items()})
+    files[out / "README.md"] = index_readme(rows, notes, fmt, Path(table))
+    for path, text in files.items():
+        _write(path, text)
+    return [out / p.case for p in rows]
 
 
 def _cards(p: BeamProperties, fmt: str, part_id: int) -> dict:
