@@ -172,3 +172,16 @@ def test_flow_table_reproduces_a_power_law_and_refuses_a_steep_curve():
     assert np.allclose(out, y[1:], rtol=0.02)
     with pytest.raises(ValueError, match="steeper"):
         flow_table(x, 2.0 * E * x, E, tw.N_TAB)
+
+
+def test_uniaxial_stress_of_the_calibrated_closed_tube():
+    """The tensile stage's closed tube (sigma_y ~0.05, n ~0.07: a flow stress that jumps to
+    ~20 MPa within 1e-12 of plastic strain) on a fine strain table: every point brackets
+    its root (at E eps the plastic strain is exactly zero, not a rounding residue whose
+    0.07th power is ~0.06), stays between sigma_y and E eps, and rises with the strain."""
+    from harnesspipe.models.tube_equivalent import uniaxial_stress
+    E, sy, K, n = 1524.2689, 0.045771232, 31.072845, 0.068638925
+    eps = np.linspace(0.0, 0.12 * 1.001, 4001)
+    s = uniaxial_stress(eps, E, sy, K, n)
+    assert np.all(s <= E * eps + 1e-12) and np.all(s[E * eps >= sy] >= sy)
+    assert np.all(np.diff(s) >= 0.0)

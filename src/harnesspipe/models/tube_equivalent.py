@@ -134,7 +134,7 @@ def uniaxial_stress(eps, E: float, sigma_y: float, K: float, n: float) -> np.nda
     out = np.minimum(E * eps, sigma_y) if sigma_y > 0 else np.zeros_like(eps)
     for i, e in enumerate(eps):
         if E * e > sigma_y:
-            out[i] = brentq(lambda s: s - sigma_y - K * max(e - s / E, 0.0) ** n,
+            out[i] = brentq(lambda s: s - sigma_y - K * max((E * e - s) / E, 0.0) ** n,
                             sigma_y, E * e, xtol=1e-14, rtol=1e-13)
     return out
 
