@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from harnesspipe.config import load
+from harnesspipe.config import ConfigError, load
 from harnesspipe.models.hifi import three_point
 from harnesspipe.stages.hifi import inputs
 
@@ -50,7 +50,6 @@ def test_an_input_that_applies_does_change_the_run():
 def test_build_state_keys_reach_the_run():
     """--set wire_fill / end_tape_layers (config hifi.build) go into the run's config (so into
     the mesh and the shells); an unknown key or a value the schema refuses is refused."""
-    from harnesspipe.config import ConfigError
     cfg = load()
     inp = inputs(cfg, "cwb19_t2_closed", {"wire_fill": "0.25"})
     assert inp.config["hifi"]["build"]["wire_fill"] == 0.25
@@ -81,3 +80,26 @@ def test_end_tape_layers_thicken_the_end_bands_only():
     np.testing.assert_allclose(t3[ends], 3.0 * t1[ends])
     np.testing.assert_array_equal(t3[~ends], t1[~ends])
     np.testing.assert_array_equal(rho3, rho1)
+
+
+def test_corrugation_pitch_is_a_set_key_of_the_tubes():
+    """``--set open_tube.pitch=4`` reaches the tube's homogenisation (its hoop bending
+    stiffness grows with the ridge's spacing, issue 27 item 4); a pitch <= 0 and a pitch on
+    the fabric sleeve are refused, naming the key."""
+    from harnesspipe.models import hifi_mesh as hm
+    from harnesspipe.models.hifi_bundle import shell_materials
+    cfg = load()
+    base = inputs(cfg, "cwb19_t2_open_halflap", {})
+    wide = inputs(cfg, "cwb19_t2_open_halflap", {"open_tube.pitch": "4"})
+    assert base.config["coverings"]["open_tube"]["pitch"] == cfg["coverings"]["open_tube"]["pitch"]
+    assert wide.config["coverings"]["open_tube"]["pitch"] == 4.0
+    assert wide.config["coverings"]["closed_tube"]["pitch"] == cfg["coverings"]["closed_tube"]["pitch"]
+    mesh = hm.build_mesh(base.case, base.config, "quick")
+    tube = mesh.shell_part == hm.PART_TUBE
+    _, t_base, _ = shell_materials(mesh, base)
+    _, t_wide, _ = shell_materials(mesh, wide)
+    assert t_wide[tube][0] != pytest.approx(t_base[tube][0], rel=1e-3)   # t_eq = sqrt(12 D_h / k_ax)
+    with pytest.raises(ConfigError, match="open_tube.pitch=0: expected a corrugation pitch"):
+        inputs(cfg, "cwb19_t2_open_halflap", {"open_tube.pitch": "0"})
+    with pytest.raises(ConfigError, match="fabric_tube.pitch: unknown parameter"):
+        inputs(cfg, "cwb19_t2_fabric", {"fabric_tube.pitch": "3"})

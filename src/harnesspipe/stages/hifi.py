@@ -23,6 +23,7 @@ EXPLICIT_KEYS = ("t_total", "f_m", "safety", "mass_damping", "penalty", "penalty
                  "search_margin", "tie_damping", "stop_deflection")
 BUILD_KEYS = ("wire_fill", "end_tape_layers")    # the specimen's build state (config hifi.build)
 COVERINGS = ("closed_tube", "open_tube", "fabric_tube")
+TUBES = ("closed_tube", "open_tube")             # their corrugation pitch is a --set key too
 
 
 def case_definition(cfg: dict, case: str) -> dict:
@@ -67,6 +68,7 @@ def parameters(cfg: dict, overrides: dict, table2: Path | None = None,
         "resolution": dict(resolution(cfg)["hifi"]),
         "coverings": covering_properties(cfg, table2),
         "build": dict(cfg["hifi"]["build"]),
+        "geometry": {},             # --set <tube>.pitch: the corrugation pitch (an assumption)
     }
     for key, value in (interface or {}).items():
         p["build" if key in BUILD_KEYS else "interface"][key] = float(value)
@@ -81,6 +83,8 @@ def parameters(cfg: dict, overrides: dict, table2: Path | None = None,
         group, _, name = key.rpartition(".")
         if group in COVERINGS and name in ("E", "sigma_y", "K", "n"):
             p["coverings"][group][name] = value
+        elif group in TUBES and name == "pitch":
+            p["geometry"].setdefault(group, {})["pitch"] = value
         elif key in INTERFACE_KEYS:
             p["interface"][key] = value
         elif key in EXPLICIT_KEYS:
@@ -92,7 +96,8 @@ def parameters(cfg: dict, overrides: dict, table2: Path | None = None,
         else:
             allowed = dict.fromkeys([*INTERFACE_KEYS, *EXPLICIT_KEYS, *BUILD_KEYS,
                                      *sorted(p["resolution"]),
-                                     *(f"{c}.E|sigma_y|K|n" for c in COVERINGS)])
+                                     *(f"{c}.E|sigma_y|K|n" for c in COVERINGS),
+                                     *(f"{c}.pitch" for c in TUBES)])
             raise ConfigError(f"--set {key}: unknown parameter (one of {', '.join(allowed)})")
     relation = interface_problem(p["interface"])
     if relation and (interface or overrides.keys() & {"delta0", "delta_f"}):
@@ -139,7 +144,8 @@ def inputs(cfg: dict, case: str, overrides: dict, table2: Path | None = None,
     definition = case_definition(cfg, case)
     t_total = p["explicit"].get("t_total", res["t_total"] * definition.get("t_total_scale", 1.0))
     explicit = {**p["explicit"], "t_total": float(t_total)}
-    cfg = {**cfg, "hifi": {**cfg["hifi"], "build": p["build"]}}      # --set build keys
+    cfg = {**cfg, "hifi": {**cfg["hifi"], "build": p["build"]},      # --set build keys
+           "coverings": {c: {**v, **p["geometry"].get(c, {})} for c, v in cfg["coverings"].items()}}
     return HifiInputs(definition, cfg, p["interface"], explicit,
                       {k: v for k, v in res.items() if k != "t_total"}, p["coverings"])
 
