@@ -293,6 +293,37 @@ def test_prediction_band_is_finite_where_a_parameter_is_not_determined():
     np.testing.assert_allclose(one["band_N"], one["standard_error"]["k"] * 0.7 * ROWS, rtol=1e-4)
 
 
+def test_replicate_band_of_a_linear_model_is_the_standard_error_of_the_mean_force():
+    """F = a u + b u^2 with four replicates exactly in that family, fitted at their mean
+    (a, b): each replicate's deviation is J d_k, so Var F_i = J_i C_sandwich J_i^T is the
+    variance of the replicates' mean force at row i, s_i^2 / n (sample variance, n - 1).
+    fit_summary returns it as band_replicate_N and curve_bands writes t(0.975, n - 1) times it
+    on the curve's grid: the textbook t interval of the mean force at each row.  A closed-form
+    parameter (a, taken from each replicate) gives the same to first order in its scatter."""
+    a_k = 0.7 * np.array([1.00, 1.03, 0.98, 1.01])
+    b_k = 0.02 * np.array([1.02, 0.97, 1.01, 1.00])
+    R = np.array([line_and_square({"a": a, "b": b}) for a, b in zip(a_k, b_k)])
+    p = {"a": a_k.mean(), "b": b_k.mean()}
+    J = np.column_stack([p["a"] * ROWS, p["b"] * ROWS**2])
+    sem = R.std(axis=0, ddof=1) / np.sqrt(len(R))
+    np.testing.assert_allclose(unc.replicate_band(J, R), sem, rtol=1e-10, atol=1e-14)
+    out = unc.fit_summary(line_and_square, p, ["a", "b"], ROWS, R)
+    np.testing.assert_allclose(out["band_replicate_N"], sem, rtol=1e-6, atol=1e-12)
+    t3 = 3.182446305284263                       # Student's t(0.975) on 3 dof
+    curve = pd.DataFrame({"displacement_mm": ROWS, "force_N": line_and_square(p)})
+    hardening = {"sigma_y": 1.0, "K": 2.0, "n": 0.5}      # curve_bands' flow stress needs them
+    written, _ = unc.curve_bands(dict(out), {**p, **hardening}, ROWS, curve, (1e-3, 0.1))
+    np.testing.assert_allclose(written["band_replicate_N"], t3 * sem, rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(written["band_N"], unc.Z95 * out["band_N"])
+    closed = unc.fit_summary(line_and_square, {"a": np.exp(np.log(a_k).mean()), "b": p["b"]},
+                             ["b"], ROWS, R, closed_form={"a": list(a_k)})
+    np.testing.assert_allclose(closed["band_replicate_N"][1:], sem[1:], rtol=0.03)
+    # the band is the specimens' scatter, not the load-cell noise: without scatter it vanishes
+    same = unc.fit_summary(line_and_square, p, ["a", "b"], ROWS, np.repeat(R[:1], 3, axis=0))
+    np.testing.assert_allclose(same["band_replicate_N"], 0.0, atol=1e-12)
+    assert unc.fit_summary(line_and_square, p, ["a", "b"], ROWS, R[:1])["band_replicate_N"] is None
+
+
 def test_flow_stress_band_is_the_delta_method_and_matches_sampling():
     """sigma = sigma_Y + K eps^n: the delta-method sd against the spread of sigma over
     50 000 draws of ln p ~ N(ln p*, C) with a small (linear-regime) correlated C, at

@@ -163,7 +163,7 @@ def fit_uncertainty(u, replicates, params: dict, settings: dict) -> dict:
     model error, not noise)."""
     if replicates is None:
         return dict.fromkeys(("standard_error", "standard_error_dof", "replicate_correlation",
-                              "fisher", "chi_square", "band_N"))
+                              "fisher", "chi_square", "band_N", "band_replicate_N"))
     u, R = np.asarray(u, dtype=float), np.atleast_2d(np.asarray(replicates, dtype=float))
     span, r_o, rs = settings["three_point"]["span"], settings["r_o"], settings["rom"]
     fitted = ["K", "n"]

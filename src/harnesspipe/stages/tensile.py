@@ -31,7 +31,8 @@ def fit_component(component: str, reference: Path, settings: dict, outdir: Path)
     and fit.png.  fit.json holds, besides the parameters, their uncertainty
     (:func:`harnesspipe.calibrate.uncertainty.fit_summary`) and ``rows``, the number of
     measured rows fitted, and ``flow_stress`` (eq. 2 and its 95 % band over the plastic
-    strains of the flow-stress coordinates); curve.csv the fitted curve's 95 % band ``band_N``
+    strains of the flow-stress coordinates); curve.csv the fitted curve's 95 % half-widths
+    ``band_N`` (Fisher) and ``band_replicate_N`` (replicate sandwich)
     (:func:`harnesspipe.calibrate.uncertainty.curve_bands`)."""
     outdir = Path(outdir)
     ref = read_prepared(reference)
