@@ -64,21 +64,27 @@ def test_a_side_the_data_do_not_bound_is_unbounded():
 
 def test_fit_intervals_take_the_profile_where_the_fisher_error_is_large():
     """fit.json's interval95: estimate * exp(+-1.96 SE) for an SE up to PROFILE_SE (a), the
-    profile above it (b), nothing for a closed-form parameter without an SE; the profile uses
-    the noise of the replicates' mean read off their rows (three replicates of noise 0.5:
-    the mean's sd 0.5 / sqrt(3))."""
+    profile above it (b), nothing for a closed-form parameter without an SE (c); the profile
+    uses the noise of the replicates' mean read off their rows (three replicates of noise 0.5:
+    the mean's sd 0.5 / sqrt(3)).  With a closed-form parameter in the fit the profile holds
+    it and is widened by the Fisher SE over the conditional one: an SE twice that doubles
+    each side in ln p."""
     rng = np.random.default_rng(11)
     R = line_and_square({"a": 0.7, "b": 0.002}) + 0.5 * rng.standard_normal((3, U.size))
     beta = np.linalg.lstsq(X, R.mean(axis=0), rcond=None)[0]
     p = {"a": beta[0], "b": beta[1], "c": 1.0}
-    se = {"a": 0.02, "b": 0.2, "c": None}
-    out = profile.fit_intervals(line_and_square, p, ["a", "b"], U, R,
-                                {"standard_error": se})
+    sd_b = np.sqrt(np.linalg.inv(X.T @ X)[1, 1]) * 0.5 / np.sqrt(3)
+    se = {"a": 0.02, "b": sd_b / p["b"], "c": None}
+    assert se["b"] > profile.PROFILE_SE
+    out = profile.fit_intervals(line_and_square, p, ["a", "b"], U, R, {"standard_error": se})
     assert out["a"] == {"lower": pytest.approx(p["a"] * np.exp(-1.96 * 0.02)),
                         "upper": pytest.approx(p["a"] * np.exp(1.96 * 0.02)), "method": "fisher"}
     assert out["c"] is None
     assert out["b"]["method"] == "profile"
-    sd_b = np.sqrt(np.linalg.inv(X.T @ X)[1, 1]) * 0.5 / np.sqrt(3)
     half = 1.96 * sd_b                          # the noise read off the rows: ~5 % in s
     assert out["b"]["upper"] - p["b"] == pytest.approx(half, rel=0.15)
     assert p["b"] - out["b"]["lower"] == pytest.approx(half, rel=0.15)
+    wide = profile.fit_intervals(line_and_square, p, ["a", "b"], U, R,
+                                 {"standard_error": {**se, "b": 2.0 * se["b"]}})["b"]
+    for side in ("lower", "upper"):
+        assert np.log(wide[side] / p["b"]) == pytest.approx(2.0 * np.log(out["b"][side] / p["b"]), rel=0.1)

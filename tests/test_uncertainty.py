@@ -365,3 +365,44 @@ def test_curve_bands_put_the_band_on_the_curve_grid_and_the_flow_stress_in_fit_j
     assert flow["band"][-1] == pytest.approx(unc.Z95 * sd[0], rel=1e-3)
     fisher["standard_error"]["n"] = None
     assert unc.curve_bands({"fisher": fisher}, p, u, curve, (1e-3, 0.1))[1]["band"] is None
+
+
+def test_fisher_covariance_of_a_closed_form_parameter_is_that_of_the_estimator():
+    """a from a closed form -- the slope through the origin on the first 30 rows, whose
+    gradient d ln a / dF is u_i / (a sum u^2) there -- and b by least squares on what a
+    leaves: Cov = s^2 M M^T (estimator_map) against the spread of that estimator over 4000
+    noise draws (linear in F: exact up to sampling, ~3 %); least squares on both would
+    give a far smaller SE of a."""
+    p = {"a": 0.7, "b": 0.002}
+    J = np.column_stack([p["a"] * ROWS, p["b"] * ROWS**2])
+    window = (ROWS > 0.0) & (ROWS <= ROWS[30])
+    g = np.where(window, ROWS / (p["a"] * ROWS[window] @ ROWS[window]), 0.0)
+    M, touched = unc.estimator_map(J, ["a", "b"], {"a": g})
+    assert not touched.any()
+    noise = 0.05 * np.random.default_rng(53).standard_normal((4000, ROWS.size))
+    d_a = noise @ g
+    d_b = (noise - np.outer(d_a, J[:, 0])) @ np.linalg.pinv(J[:, 1:]).T
+    sampled = np.cov(np.column_stack([d_a, d_b[:, 0]]).T)
+    np.testing.assert_allclose(0.05**2 * M @ M.T, sampled, rtol=0.06)
+    least_squares = unc.estimator_map(J, ["a", "b"])[0]
+    assert np.linalg.norm(least_squares[0]) < 0.5 * np.linalg.norm(M[0])
+
+
+def test_eq13_gradients_are_the_derivatives_of_the_closed_forms():
+    """d ln E / dF_i and d ln sigma_Y / dF_i of eq. 13 against central differences of the
+    closed forms themselves, on an elastic-plastic curve (linear part held)."""
+    from harnesspipe.calibrate import eq13
+    u = np.linspace(0.0, 30.0, 201)
+    F = np.where(u < 6.0, 0.5 * u, 3.0 + 0.1 * (u - 6.0))
+    g_E = eq13.log_modulus_gradient(u, F, 127.0)
+    g_Y = eq13.log_yield_stress_gradient(u, F, 127.0)
+    for i in (3, 17, 21, 60):
+        dF = np.zeros_like(F)
+        dF[i] = 1e-6
+        dE = (np.log(eq13.effective_modulus(u, F + dF, 127.0, 7.05))
+              - np.log(eq13.effective_modulus(u, F - dF, 127.0, 7.05))) / 2e-6
+        dY = (np.log(eq13.yield_stress(u, F + dF, 127.0, 7.05))
+              - np.log(eq13.yield_stress(u, F - dF, 127.0, 7.05))) / 2e-6
+        assert g_E[i] == pytest.approx(dE, rel=1e-5, abs=1e-9)
+        assert g_Y[i] == pytest.approx(dY, rel=1e-5, abs=1e-9)
+    assert g_E[60] == 0.0 and g_Y[3] == 0.0 and g_Y[17] > 0.0     # 0.02 L = 2.54 mm: rows 16, 17

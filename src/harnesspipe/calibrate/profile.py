@@ -181,6 +181,13 @@ class Profile:
         b = -np.linalg.lstsq(J[:, 1:], J[:, 0], rcond=None)[0]
         return dict(zip(others, b)) if np.all(np.isfinite(b)) else {}
 
+    def conditional_se(self, name: str) -> float:
+        """Fisher SE of ln p_name with the other fitted parameters free and every other
+        parameter of the fit known: s sqrt([(J_f^T J_f)^-1]_jj), J_f over ``fitted``."""
+        J = log_sensitivities(self.curve, self.params, self.fitted)
+        cov = self.variance * np.linalg.pinv(J.T @ J)
+        return float(np.sqrt(cov[self.fitted.index(name), self.fitted.index(name)]))
+
     def interval(self, name: str, se: float | None) -> tuple[float | None, float | None]:
         """(lower, upper) 95 % profile interval of ``name`` (None: that side unbounded),
         walked in steps of its Fisher SE of ln p ``se`` (WALK without one)."""
@@ -203,8 +210,12 @@ def fit_intervals(curve: Callable[[dict], np.ndarray], params: dict, fitted: lis
     the Fisher SE of ln p is at most PROFILE_SE; ``profile`` (:class:`Profile`, over the
     least-squares parameters ``fitted``, the noise variance of the mean s^2 = sum_k s_k^2 / n^2
     read off each specimen's rows) for a fitted parameter above that or without an SE (a fit
-    on a boundary); a side None is unbounded.  A closed-form parameter without an SE has no
-    interval (None)."""
+    on a boundary); a side None is unbounded.  The profile holds the closed-form parameters
+    (those of ``params`` not in ``fitted``) at their estimate; their own noise, which the
+    Fisher SE includes (:func:`harnesspipe.calibrate.uncertainty.estimator_map`), widens it:
+    each side's distance in ln p times SE / SE_conditional, the ratio of the Fisher SE to the
+    one with the closed-form parameters known (exact for a model linear in ln p).  A
+    closed-form parameter without an SE has no interval (None)."""
     from harnesspipe.calibrate.uncertainty import row_noise_variance
     R = np.atleast_2d(np.asarray(replicates, dtype=float))
     se = (fisher or {}).get("standard_error") or {}
@@ -218,8 +229,12 @@ def fit_intervals(curve: Callable[[dict], np.ndarray], params: dict, fitted: lis
             if profile is None:
                 variance = sum(row_noise_variance(u, Fk) for Fk in R) / len(R) ** 2
                 profile = Profile(curve, params, fitted, R.mean(axis=0), variance)
-            lower, upper = profile.interval(name, s)
-            out[name] = {"lower": lower, "upper": upper, "method": "profile"}
+            widen = 1.0
+            if s is not None and set(params) - set(fitted):
+                widen = max(1.0, s / profile.conditional_se(name))
+            out[name] = {**dict(zip(("lower", "upper"), (
+                None if end is None else float(params[name] * (end / params[name]) ** widen)
+                for end in profile.interval(name, s)))), "method": "profile"}
         else:
             out[name] = None
     return out

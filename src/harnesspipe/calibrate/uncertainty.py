@@ -289,11 +289,33 @@ def _finite_or_none(values) -> list[float | None]:
     return [float(v) if np.isfinite(v) else None for v in values]
 
 
+def estimator_map(J: np.ndarray, names: list[str], gradients: dict | None = None):
+    """(M, touched): the linearised estimator d ln p = M e (m x N) of the parameters ``names``
+    for a small change e of the fitted curve's rows (J = dF / d ln p over ``names``), and the
+    mask of the parameters the curve does not determine.  Least squares for all:
+    M = (J^T J)^+ J^T.  A parameter in ``gradients`` (name -> d ln p / dF on the rows) is
+    taken from a closed form (eq. 13): its row of M is that gradient, and the least-squares
+    ones fit what it leaves, M_f = (J_f^T J_f)^+ J_f^T (I - J_c G).  Cov(ln p) = s^2 M M^T
+    for rows with independent noise of variance s^2."""
+    gradients = gradients or {}
+    closed = np.array([n in gradients for n in names])
+    G = np.array([gradients[n] for n in names if n in gradients]).reshape(-1, J.shape[0])
+    P, V, keep = _pseudo_inverse(J[:, ~closed])
+    M = np.zeros((len(names), J.shape[0]))
+    M[closed] = G
+    M[~closed] = P - (P @ J[:, closed]) @ G
+    touched = np.zeros(len(names), dtype=bool)
+    touched[~closed] = np.linalg.norm(V[:, ~keep], axis=1) > SHARE
+    return M, touched
+
+
 def fit_statistics(curve: Callable[[dict], np.ndarray], params: dict, names: list[str],
-                   u, replicates) -> dict | None:
+                   u, replicates, gradients: dict | None = None) -> dict | None:
     """Fisher standard errors, correlation and chi-square of a fit ``params`` to the mean of
     ``replicates`` (n x N forces on the measured rows ``u``); ``curve(p)``: the model's force
-    on ``u``; ``names``: every parameter the data set (fitted or by a closed form).
+    on ``u``; ``names``: every parameter the data set, by least squares or, those in
+    ``gradients`` (name -> d ln p / dF on the rows of the mean), by a closed form: the
+    covariance is that of the estimator (:func:`estimator_map`): s_mean^2 M M^T.
 
     Returns {"noise_sigma_N": s of one specimen's rows (rms over the specimens),
     "names", "standard_error": {name: SE of ln p or None}, "correlation": matrix,
@@ -316,9 +338,12 @@ def fit_statistics(curve: Callable[[dict], np.ndarray], params: dict, names: lis
     norms = np.linalg.norm(J, axis=0)
     if norms.min() < BOUNDARY * norms.max():
         return None
-    cov = log_covariance(J, variance)
-    P = _pseudo_inverse(J)[0]
-    band = prediction_band(J, variance * P @ P.T)    # J (J^T J)^+ J^T: finite in any case
+    M, touched = estimator_map(J, list(names), gradients)
+    cov = variance * M @ M.T
+    cov = 0.5 * (cov + cov.T)                     # symmetric to the last digit
+    band = prediction_band(J, cov)                # on the determined directions: finite
+    cov[touched, :] = np.inf
+    cov[:, touched] = np.inf
     return {"noise_sigma_N": float(np.sqrt(s2.mean())), "names": list(names), "band_N": band,
             "standard_error": dict(zip(names, _finite_or_none(np.sqrt(np.diag(cov))))),
             "correlation": correlation(cov),
@@ -326,14 +351,15 @@ def fit_statistics(curve: Callable[[dict], np.ndarray], params: dict, names: lis
 
 
 def fit_summary(curve: Callable[[dict], np.ndarray], params: dict, fitted: list[str], u,
-                replicates, closed_form: dict | None = None) -> dict:
+                replicates, closed_form: dict | None = None, gradients: dict | None = None) -> dict:
     """Everything fit.json says about the uncertainty of a fit ``params`` to the mean of
     ``replicates`` (n x N forces on the measured rows ``u``; ``curve(p)``: model force on u):
 
     * ``standard_error``, ``standard_error_dof``, ``replicate_correlation``: the replicate
       sandwich (:func:`fit_covariance`; ``fitted`` by least squares, ``closed_form`` name ->
       value on each replicate), or the single curve's residual;
-    * ``fisher``, ``chi_square``: :func:`fit_statistics` over every parameter in ``params``;
+    * ``fisher``, ``chi_square``: :func:`fit_statistics` over every parameter in ``params``
+      (``gradients``: those of the closed-form ones on the rows of the mean);
     * ``band_N``: the Fisher standard deviation of the fitted curve on ``u``, and
       ``band_replicate_N`` that of the replicate sandwich (:func:`replicate_band`; None
       without replicates or on a boundary): arrays, for the stage to put beside its curve,
@@ -342,7 +368,7 @@ def fit_summary(curve: Callable[[dict], np.ndarray], params: dict, fitted: list[
     R = np.atleast_2d(np.asarray(replicates, dtype=float))
     reps = R if len(R) >= 2 else None
     found = _fit_covariance(curve, params, fitted, R.mean(axis=0), reps, closed_form)
-    stats_ = fit_statistics(curve, params, list(params), u, R)
+    stats_ = fit_statistics(curve, params, list(params), u, R, gradients)
     out = {"standard_error": None, "standard_error_dof": error_dof(R.shape[1], fitted, reps),
            "replicate_correlation": None, "fisher": None, "chi_square": None, "band_N": None,
            "band_replicate_N": None}
