@@ -293,6 +293,37 @@ def test_prediction_band_is_finite_where_a_parameter_is_not_determined():
     np.testing.assert_allclose(one["band_N"], one["standard_error"]["k"] * 0.7 * ROWS, rtol=1e-4)
 
 
+def test_replicate_band_of_a_linear_model_is_the_standard_error_of_the_mean_force():
+    """F = a u + b u^2 with four replicates exactly in that family, fitted at their mean
+    (a, b): each replicate's deviation is J d_k, so Var F_i = J_i C_sandwich J_i^T is the
+    variance of the replicates' mean force at row i, s_i^2 / n (sample variance, n - 1).
+    fit_summary returns it as band_replicate_N and curve_bands writes t(0.975, n - 1) times it
+    on the curve's grid: the textbook t interval of the mean force at each row.  A closed-form
+    parameter (a, taken from each replicate) gives the same to first order in its scatter."""
+    a_k = 0.7 * np.array([1.00, 1.03, 0.98, 1.01])
+    b_k = 0.02 * np.array([1.02, 0.97, 1.01, 1.00])
+    R = np.array([line_and_square({"a": a, "b": b}) for a, b in zip(a_k, b_k)])
+    p = {"a": a_k.mean(), "b": b_k.mean()}
+    J = np.column_stack([p["a"] * ROWS, p["b"] * ROWS**2])
+    sem = R.std(axis=0, ddof=1) / np.sqrt(len(R))
+    np.testing.assert_allclose(unc.replicate_band(J, R), sem, rtol=1e-10, atol=1e-14)
+    out = unc.fit_summary(line_and_square, p, ["a", "b"], ROWS, R)
+    np.testing.assert_allclose(out["band_replicate_N"], sem, rtol=1e-6, atol=1e-12)
+    t3 = 3.182446305284263                       # Student's t(0.975) on 3 dof
+    curve = pd.DataFrame({"displacement_mm": ROWS, "force_N": line_and_square(p)})
+    hardening = {"sigma_y": 1.0, "K": 2.0, "n": 0.5}      # curve_bands' flow stress needs them
+    written, _ = unc.curve_bands(dict(out), {**p, **hardening}, ROWS, curve, (1e-3, 0.1))
+    np.testing.assert_allclose(written["band_replicate_N"], t3 * sem, rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(written["band_N"], unc.Z95 * out["band_N"])
+    closed = unc.fit_summary(line_and_square, {"a": np.exp(np.log(a_k).mean()), "b": p["b"]},
+                             ["b"], ROWS, R, closed_form={"a": list(a_k)})
+    np.testing.assert_allclose(closed["band_replicate_N"][1:], sem[1:], rtol=0.03)
+    # the band is the specimens' scatter, not the load-cell noise: without scatter it vanishes
+    same = unc.fit_summary(line_and_square, p, ["a", "b"], ROWS, np.repeat(R[:1], 3, axis=0))
+    np.testing.assert_allclose(same["band_replicate_N"], 0.0, atol=1e-12)
+    assert unc.fit_summary(line_and_square, p, ["a", "b"], ROWS, R[:1])["band_replicate_N"] is None
+
+
 def test_flow_stress_band_is_the_delta_method_and_matches_sampling():
     """sigma = sigma_Y + K eps^n: the delta-method sd against the spread of sigma over
     50 000 draws of ln p ~ N(ln p*, C) with a small (linear-regime) correlated C, at
@@ -334,3 +365,44 @@ def test_curve_bands_put_the_band_on_the_curve_grid_and_the_flow_stress_in_fit_j
     assert flow["band"][-1] == pytest.approx(unc.Z95 * sd[0], rel=1e-3)
     fisher["standard_error"]["n"] = None
     assert unc.curve_bands({"fisher": fisher}, p, u, curve, (1e-3, 0.1))[1]["band"] is None
+
+
+def test_fisher_covariance_of_a_closed_form_parameter_is_that_of_the_estimator():
+    """a from a closed form -- the slope through the origin on the first 30 rows, whose
+    gradient d ln a / dF is u_i / (a sum u^2) there -- and b by least squares on what a
+    leaves: Cov = s^2 M M^T (estimator_map) against the spread of that estimator over 4000
+    noise draws (linear in F: exact up to sampling, ~3 %); least squares on both would
+    give a far smaller SE of a."""
+    p = {"a": 0.7, "b": 0.002}
+    J = np.column_stack([p["a"] * ROWS, p["b"] * ROWS**2])
+    window = (ROWS > 0.0) & (ROWS <= ROWS[30])
+    g = np.where(window, ROWS / (p["a"] * ROWS[window] @ ROWS[window]), 0.0)
+    M, touched = unc.estimator_map(J, ["a", "b"], {"a": g})
+    assert not touched.any()
+    noise = 0.05 * np.random.default_rng(53).standard_normal((4000, ROWS.size))
+    d_a = noise @ g
+    d_b = (noise - np.outer(d_a, J[:, 0])) @ np.linalg.pinv(J[:, 1:]).T
+    sampled = np.cov(np.column_stack([d_a, d_b[:, 0]]).T)
+    np.testing.assert_allclose(0.05**2 * M @ M.T, sampled, rtol=0.06)
+    least_squares = unc.estimator_map(J, ["a", "b"])[0]
+    assert np.linalg.norm(least_squares[0]) < 0.5 * np.linalg.norm(M[0])
+
+
+def test_eq13_gradients_are_the_derivatives_of_the_closed_forms():
+    """d ln E / dF_i and d ln sigma_Y / dF_i of eq. 13 against central differences of the
+    closed forms themselves, on an elastic-plastic curve (linear part held)."""
+    from harnesspipe.calibrate import eq13
+    u = np.linspace(0.0, 30.0, 201)
+    F = np.where(u < 6.0, 0.5 * u, 3.0 + 0.1 * (u - 6.0))
+    g_E = eq13.log_modulus_gradient(u, F, 127.0)
+    g_Y = eq13.log_yield_stress_gradient(u, F, 127.0)
+    for i in (3, 17, 21, 60):
+        dF = np.zeros_like(F)
+        dF[i] = 1e-6
+        dE = (np.log(eq13.effective_modulus(u, F + dF, 127.0, 7.05))
+              - np.log(eq13.effective_modulus(u, F - dF, 127.0, 7.05))) / 2e-6
+        dY = (np.log(eq13.yield_stress(u, F + dF, 127.0, 7.05))
+              - np.log(eq13.yield_stress(u, F - dF, 127.0, 7.05))) / 2e-6
+        assert g_E[i] == pytest.approx(dE, rel=1e-5, abs=1e-9)
+        assert g_Y[i] == pytest.approx(dY, rel=1e-5, abs=1e-9)
+    assert g_E[60] == 0.0 and g_Y[3] == 0.0 and g_Y[17] > 0.0     # 0.02 L = 2.54 mm: rows 16, 17

@@ -33,6 +33,7 @@ from harnesspipe.data.synthesize import GENERATORS, read_truth, synthesize
 TENSILE_STRAINS = (1e-2, 0.1)   # plastic strains of the issue-29 criterion (tube tensile tests)
 # the fabric test reaches plastic strains of ~2.5 % only (calibrate.tensile.FABRIC_STRAINS)
 STRAINS = {"closed_tube": TENSILE_STRAINS, "open_tube": TENSILE_STRAINS, "fabric_tube": (5e-3, 2.5e-2)}
+ROM_STRAINS = (2e-3, 5e-3, 2e-2)   # plastic strains of the criterion (three-point tests)
 PARAMETERS = ("E", "sigma_y", "K", "n")
 Z95 = float(stats.norm.ppf(0.975))
 
@@ -85,6 +86,19 @@ def specimens_mean(truth_record: dict) -> dict:
     return {k: float(np.mean([s[k] for s in samples])) for k in PARAMETERS}
 
 
+def gauss_newton(on_rows, target: np.ndarray, p: dict, names: list[str],
+                 iterations: int = 2) -> dict:
+    """Least-squares parameters ``names`` of ``on_rows(p)`` against ``target`` by Gauss-Newton
+    steps in ln p from ``p`` (the other parameters of ``p`` held)."""
+    from harnesspipe.calibrate.uncertainty import log_sensitivities
+    p = dict(p)
+    for _ in range(iterations):
+        J = log_sensitivities(on_rows, p, list(names))
+        step, *_ = np.linalg.lstsq(J, target - on_rows(p), rcond=None)
+        p.update({k: p[k] * float(np.exp(d)) for k, d in zip(names, step)})
+    return p
+
+
 def specimens_fit(cfg: dict, component: str, truth_record: dict, preset: str = "quick",
                   iterations: int = 2) -> dict:
     """What a fit to the specimens' mean curve finds without load-cell noise: the
@@ -93,7 +107,6 @@ def specimens_fit(cfg: dict, component: str, truth_record: dict, preset: str = "
     describes the noise alone, so this is its truth; the specimens' mean parameters differ
     from it by the curvature of the model over the specimen scatter (second order in the 4 %
     scatter, yet comparable to Fisher SEs of 0.1-1 %)."""
-    from harnesspipe.calibrate.uncertainty import log_sensitivities
     simulate = generators._tensile_simulator(cfg, component, preset)
     rows = int(cfg["synthesize"]["rows"])
 
@@ -103,12 +116,7 @@ def specimens_fit(cfg: dict, component: str, truth_record: dict, preset: str = "
         return np.interp(u, c.displacement, c.force)
 
     target = np.mean([on_rows(s) for s in truth_record["samples"].values()], axis=0)
-    p = specimens_mean(truth_record)
-    for _ in range(iterations):
-        J = log_sensitivities(on_rows, p, list(PARAMETERS))
-        step, *_ = np.linalg.lstsq(J, target - on_rows(p), rcond=None)
-        p = {k: p[k] * float(np.exp(d)) for k, d in zip(PARAMETERS, step)}
-    return p
+    return gauss_newton(on_rows, target, specimens_mean(truth_record), list(PARAMETERS), iterations)
 
 
 def truths(truth_record: dict, specimens: dict | None = None) -> dict:
@@ -161,16 +169,26 @@ def covers(estimate: float, se: float | None, truth: float, q: float) -> bool | 
     return bool(abs(np.log(truth / estimate)) <= q * se)
 
 
+def within(interval: dict, truth: float) -> bool:
+    """Whether fit.json's ``interval95`` entry {lower, upper} (None: unbounded) holds ``truth``."""
+    return ((interval["lower"] is None or interval["lower"] <= truth)
+            and (interval["upper"] is None or truth <= interval["upper"]))
+
+
 def interval_records(fit: dict, truth_record: dict, strains=TENSILE_STRAINS,
                      specimens: dict | None = None) -> list[dict]:
     """One row per quantity and kind of interval of one fit: estimate, truth, SE (ln),
-    standardised error z = ln(estimate / truth) / SE and whether the 95 % interval covers.
-    ``specimens``: the Fisher interval's truth (:func:`specimens_fit`; default the
-    specimens' mean parameters)."""
+    standardised error z = ln(estimate / truth) / SE, whether the 95 % interval covers and
+    by which ``method``.  The Fisher kind of E, sigma_Y, K, n is the fit's reported
+    ``interval95`` where it has one (Fisher or profile likelihood,
+    :func:`harnesspipe.calibrate.profile.fit_intervals`), else estimate * exp(+-1.96 SE);
+    the flow stresses and the sandwich: estimate * exp(+-q SE).  ``specimens``: the Fisher
+    interval's truth (:func:`specimens_fit`; default the specimens' mean parameters)."""
     t = truths(truth_record, specimens)
     p = fit["parameters"]
     fisher = fit.get("fisher") or {}
     sandwich_corr = (fit.get("replicate_correlation") or {})
+    reported = fit.get("interval95") or {}
     kinds = {
         "fisher": (quantities(p, fisher.get("standard_error"), fisher.get("names"),
                               fisher.get("correlation"), strains), t["specimens"], Z95),
@@ -183,8 +201,13 @@ def interval_records(fit: dict, truth_record: dict, strains=TENSILE_STRAINS,
         truth = truth_values(truth_p, strains)
         for name, (est, se) in values.items():
             z = None if se is None or not se > 0 else float(np.log(est / truth[name]) / se)
+            interval = reported.get(name) if kind == "fisher" else None
+            if interval is not None:
+                covered, method = within(interval, truth[name]), interval["method"]
+            else:
+                covered, method = covers(est, se, truth[name], q), "wald"
             rows.append({"kind": kind, "quantity": name, "estimate": est, "truth": truth[name],
-                         "se": se, "q": q, "z": z, "covered": covers(est, se, truth[name], q),
+                         "se": se, "q": q, "z": z, "covered": covered, "method": method,
                          "converged": bool(fit["converged"]), "nfev": int(fit["nfev"])})
     return rows
 
@@ -203,6 +226,70 @@ def tensile_seed(cfg: dict, seed: int, components, work: Path, preset: str = "qu
         specimens = specimens_fit(cfg, component, record, preset)
         for r in interval_records(fit, record, STRAINS[component], specimens):
             rows.append({"seed": int(seed), "component": component, **r})
+    return rows
+
+
+def rom_twin(cfg: dict, seed: int, out: Path, cases, profile: str = "quick") -> Path:
+    """The twin's three-point tests of ``cases`` at ``seed``, the curves made by the ROM on
+    the mesh of the config's ``profile``, written into ``out`` as ``harnesspipe synthesize``
+    does."""
+    cfg = {**cfg, "synthesize": {**cfg["synthesize"], "seed": int(seed)}}
+
+    def specs(c: dict):
+        return [s for s in generators.three_point(c, profile) if s.item in cases]
+
+    with _generator("_coverage_three_point", specs) as name:
+        return synthesize(cfg, Path(out), [name])
+
+
+def rom_settings(cfg: dict, case: str, profile: str = "quick", maxfev: int | None = None) -> dict:
+    """The ROM stage's settings of ``case`` for ``profile``, fitted to the measured mean
+    (``rom.reference: measured``), ``maxfev`` in place of the profile's simplex budget."""
+    from harnesspipe.stages import stage_settings
+    settings = json.loads(stage_settings.rom(cfg, cfg["profiles"][profile], case))
+    settings["reference"] = "measured"
+    if maxfev is not None:
+        settings["maxfev"] = int(maxfev)
+    return settings
+
+
+def rom_specimens_fit(truth_record: dict, settings: dict, u, iterations: int = 2) -> dict:
+    """The Fisher interval's truth for the ROM stage: what its estimator finds on the mean of
+    the specimens' noise-free curves on the rows ``u`` -- E by eq. 13 with the model-consistent
+    factor (:func:`harnesspipe.calibrate.rom.effective_modulus`), then the least-squares
+    (sigma_Y, K, n) at that E, by Gauss-Newton from the specimens' mean parameters."""
+    from harnesspipe.calibrate import rom as rom_fit
+    u = np.asarray(u, dtype=float)
+
+    def on_rows(p: dict) -> np.ndarray:
+        return rom_fit.simulate_on(u, p, settings)
+
+    target = np.mean([on_rows(s) for s in truth_record["samples"].values()], axis=0)
+    p = {**specimens_mean(truth_record), "E": rom_fit.effective_modulus(u, target, settings)[0]}
+    fitted = [k for k in PARAMETERS if k in settings["rom"]["simplex_parameters"]]
+    return gauss_newton(on_rows, target, p, fitted, iterations)
+
+
+def rom_seed(cfg: dict, seed: int, cases, work: Path, profile: str = "quick",
+             maxfev: int | None = None) -> list[dict]:
+    """Regenerate the twin's three-point tests of ``cases`` at ``seed`` (ROM on ``profile``'s
+    mesh) and fit each by the ROM stage (same mesh, measured reference); the
+    :func:`interval_records` of every fit at the flow-stress strains ROM_STRAINS, tagged with
+    seed and case (as ``component``)."""
+    from harnesspipe.stages.data import prepare_test, read_prepared
+    from harnesspipe.stages.rom import fit_case
+    data = rom_twin(cfg, seed, Path(work) / "data", cases, profile)
+    truth = read_truth(data)
+    rows = []
+    for case in cases:
+        test_id = f"bend_{case}"
+        settings = rom_settings(cfg, case, profile, maxfev)
+        ref = prepare_test(data, test_id, Path(work) / case / "ref.h5")
+        fit = fit_case(case, ref, settings, Path(work) / case / "fit")
+        u, _ = read_prepared(ref).rows()
+        specimens = rom_specimens_fit(truth[test_id], settings, u)
+        for r in interval_records(fit, truth[test_id], ROM_STRAINS, specimens):
+            rows.append({"seed": int(seed), "component": case, **r})
     return rows
 
 

@@ -96,6 +96,26 @@ def effective_modulus(u, F, span: float, r_o: float, window: float = 0.01) -> fl
     return modulus_from_slope(linear_slope(u, F, span, window), span, r_o)
 
 
+def log_modulus_gradient(u, F, span: float, window: float = 0.01) -> np.ndarray:
+    """d ln E_eff / dF_i of :func:`effective_modulus` on the rows of F(u), its linear part
+    held: the slope through the origin k = sum u_i F_i / sum u_i^2 over 0 < u_i <= u_lin
+    gives u_i / (k sum u_j^2) on those rows and 0 elsewhere (the Fisher covariance of the
+    closed-form E, :func:`harnesspipe.calibrate.uncertainty.estimator_map`)."""
+    u, F = np.asarray(u, dtype=float), np.asarray(F, dtype=float)
+    k, u_lin = linear_part(u, F, span, window)
+    rows = (u > 0.0) & (u <= u_lin)
+    return np.where(rows, u / (k * np.dot(u[rows], u[rows])), 0.0)
+
+
+def log_yield_stress_gradient(u, F, span: float, fraction: float = 0.02) -> np.ndarray:
+    """d ln sigma_Y / dF_i of :func:`yield_stress`: the linear-interpolation weights of the
+    two rows around u = fraction * L over the force there."""
+    u, F = np.asarray(u, dtype=float), np.asarray(F, dtype=float)
+    u_star = fraction * span
+    weights = np.array([np.interp(u_star, u, row) for row in np.eye(u.size)])
+    return weights / force_at(u, F, u_star)
+
+
 def force_at(u, F, u_star: float) -> float:
     """Force at deflection ``u_star`` by linear interpolation (u must cover it)."""
     u = np.asarray(u, dtype=float)

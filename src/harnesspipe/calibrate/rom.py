@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harnesspipe import rom
-from harnesspipe.calibrate import eq13, uncertainty
+from harnesspipe.calibrate import eq13, profile, uncertainty
 from harnesspipe.calibrate.hardening import flow_stresses, hardening_from_three, hardening_from_two
 from harnesspipe.calibrate.objective import l2_error, objective_key
 from harnesspipe.calibrate.simplex import FitResult, nelder_mead
@@ -158,25 +158,38 @@ def fit_uncertainty(u, replicates, params: dict, settings: dict) -> dict:
     :func:`harnesspipe.calibrate.uncertainty.fit_summary`): the replicate sandwich with E
     (and sigma_Y when the simplex does not fit it) by eq. 13 on each replicate -- E with
     the fit's model-consistent factor -- and the simplex's parameters by least squares;
-    the Fisher standard errors, correlations and chi-square of all four.  All None
+    the Fisher standard errors (of this estimator: eq. 13's E, and sigma_Y when not
+    fitted, from the mean's rows in its window, the others fitted to what they leave),
+    correlations and chi-square of all four; ``interval95``
+    (:func:`harnesspipe.calibrate.profile.fit_intervals`: profile-likelihood intervals of the
+    poorly determined simplex parameters, E held at eq. 13's value).  All None
     without replicates (a hi-fi reference is one deterministic curve: its residual is
     model error, not noise)."""
     if replicates is None:
         return dict.fromkeys(("standard_error", "standard_error_dof", "replicate_correlation",
-                              "fisher", "chi_square", "band_N"))
+                              "fisher", "chi_square", "band_N", "band_replicate_N",
+                              "interval95"))
     u, R = np.asarray(u, dtype=float), np.atleast_2d(np.asarray(replicates, dtype=float))
     span, r_o, rs = settings["three_point"]["span"], settings["r_o"], settings["rom"]
+    F_mean = R.mean(axis=0)
     fitted = ["K", "n"]
     closed_form = {}
+    gradients = {"E": eq13.log_modulus_gradient(u, F_mean, span, rs["linear_window"])}
     if "sigma_y" in rs["simplex_parameters"]:
         fitted.insert(0, "sigma_y")
-    elif len(R) >= 2:
-        closed_form["sigma_y"] = [eq13.yield_stress(u, Fk, span, r_o, rs["yield_deflection"])
-                                  for Fk in R]
+    else:
+        gradients["sigma_y"] = eq13.log_yield_stress_gradient(u, F_mean, span, rs["yield_deflection"])
+        if len(R) >= 2:
+            closed_form["sigma_y"] = [eq13.yield_stress(u, Fk, span, r_o, rs["yield_deflection"])
+                                      for Fk in R]
     if len(R) >= 2:
         def eq13_modulus(force):
             return eq13.effective_modulus(u, force, span, r_o, rs["linear_window"])
-        factor = params["E"] / eq13_modulus(R.mean(axis=0))
+        factor = params["E"] / eq13_modulus(F_mean)
         closed_form["E"] = [factor * eq13_modulus(Fk) for Fk in R]
-    return uncertainty.fit_summary(lambda p: simulate_on(u, p, settings), params, fitted, u, R,
-                                   closed_form)
+
+    def curve(p: dict) -> np.ndarray:
+        return simulate_on(u, p, settings)
+    summary = uncertainty.fit_summary(curve, params, fitted, u, R, closed_form, gradients)
+    summary["interval95"] = profile.fit_intervals(curve, params, fitted, u, R, summary["fisher"])
+    return summary

@@ -125,12 +125,11 @@ def residual_variance(residual: np.ndarray, n_parameters: int) -> float:
     return float(r @ r) / dof
 
 
-def replicate_log_covariance(J: np.ndarray, replicates: np.ndarray,
-                             closed_form: np.ndarray | None = None) -> np.ndarray:
-    """Sandwich covariance of ln p for a fit to the mean of ``replicates`` (n x N), n >= 2.
-
-    ``closed_form`` (n x c): ln of the parameters the calibration takes from a closed form,
-    evaluated on each replicate; they are the first c columns of ``J`` and of the result."""
+def _replicate_deviations(J: np.ndarray, replicates: np.ndarray,
+                          closed_form: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(D, V, keep): D (n x m) each replicate's deviation from the mean in ln p -- the
+    closed-form parameters' own (first c columns of ``J``), the least-squares map of what
+    they leave for the rest -- and V, keep of the least-squares part's SVD."""
     R = np.asarray(replicates, dtype=float)
     if R.ndim != 2 or R.shape[0] < 2 or R.shape[1] != J.shape[0]:
         raise ValueError(f"replicates must be (n >= 2, {J.shape[0]}), got {R.shape}")
@@ -139,17 +138,44 @@ def replicate_log_covariance(J: np.ndarray, replicates: np.ndarray,
     c = d_c.shape[1]
     dev = (R - R.mean(axis=0)) - d_c @ J[:, :c].T       # what the fitted parameters must explain
     P, V, keep = _pseudo_inverse(J[:, c:])
-    D = np.hstack([d_c, dev @ P.T])
-    cov = D.T @ D / (R.shape[0] * (R.shape[0] - 1))
+    return np.hstack([d_c, dev @ P.T]), V, keep
+
+
+def replicate_log_covariance(J: np.ndarray, replicates: np.ndarray,
+                             closed_form: np.ndarray | None = None) -> np.ndarray:
+    """Sandwich covariance of ln p for a fit to the mean of ``replicates`` (n x N), n >= 2.
+
+    ``closed_form`` (n x c): ln of the parameters the calibration takes from a closed form,
+    evaluated on each replicate; they are the first c columns of ``J`` and of the result."""
+    D, V, keep = _replicate_deviations(J, replicates, closed_form)
+    n, c = D.shape[0], D.shape[1] - V.shape[0]
+    cov = D.T @ D / (n * (n - 1))
     cov[c:, c:] = _blank_undetermined(cov[c:, c:], V, keep)
     return cov
 
 
-def fit_covariance(curve: Callable[[dict], np.ndarray], params: dict, fitted: list[str],
-                   reference: np.ndarray, replicates: np.ndarray | None = None,
-                   closed_form: dict | None = None) -> tuple[list[str], np.ndarray] | None:
-    """(names, Cov(ln p)) behind :func:`fit_standard_errors` (same arguments and cases; a fit
-    on a boundary gives an all-infinite covariance)."""
+def replicate_band(J: np.ndarray, replicates: np.ndarray,
+                   closed_form: np.ndarray | None = None) -> np.ndarray:
+    """Standard deviation of the fitted curve under the replicate sandwich (arguments as
+    :func:`replicate_log_covariance`): Var F_i = J_i C J_i^T with C = sum_k d_k d_k^T /
+    (n (n - 1)) on the directions the curve determines (one it does not see does not move
+    the curve), i.e. sum_k (J_i d_k)^2 / (n (n - 1)).  When the replicates' deviations lie
+    in the model's tangent space, J d_k is the deviation itself and this is the standard
+    error of the replicates' mean force at each row."""
+    D = _replicate_deviations(J, replicates, closed_form)[0]
+    n = D.shape[0]
+    return np.sqrt(np.sum((D @ J.T) ** 2, axis=0) / (n * (n - 1)))
+
+
+def _closed_form_logs(closed_form: dict, names: list[str]) -> np.ndarray | None:
+    """n x c: ln of each closed-form parameter of ``names`` on each replicate (None if none)."""
+    return np.log(np.column_stack([closed_form[n] for n in names])) if names else None
+
+
+def _fit_covariance(curve, params: dict, fitted: list[str], reference, replicates,
+                    closed_form: dict | None):
+    """(names, Cov(ln p), J, ln of the closed-form parameters or None) of
+    :func:`fit_covariance`; J None on a boundary (covariance all infinite); None on failure."""
     closed_form = closed_form or {}
     multi = replicates is not None and len(replicates) >= 2
     cf_names = list(closed_form) if multi else []
@@ -162,15 +188,24 @@ def fit_covariance(curve: Callable[[dict], np.ndarray], params: dict, fitted: li
         return None
     norms = np.linalg.norm(J, axis=0)
     if norms.min() < BOUNDARY * norms.max():
-        return names, np.full((len(names), len(names)), np.inf)
+        return names, np.full((len(names), len(names)), np.inf), None, None
     if multi:
-        C = np.log(np.column_stack([closed_form[n] for n in cf_names])) if cf_names else None
-        return names, replicate_log_covariance(J, replicates, C)
+        C = _closed_form_logs(closed_form, cf_names)
+        return names, replicate_log_covariance(J, replicates, C), J, C
     try:
         residual = np.asarray(reference, dtype=float) - np.asarray(curve(params))
-        return names, log_covariance(J, residual_variance(residual, len(names)))
+        return names, log_covariance(J, residual_variance(residual, len(names))), J, None
     except (RuntimeError, ArithmeticError, ValueError):
         return None
+
+
+def fit_covariance(curve: Callable[[dict], np.ndarray], params: dict, fitted: list[str],
+                   reference: np.ndarray, replicates: np.ndarray | None = None,
+                   closed_form: dict | None = None) -> tuple[list[str], np.ndarray] | None:
+    """(names, Cov(ln p)) behind :func:`fit_standard_errors` (same arguments and cases; a fit
+    on a boundary gives an all-infinite covariance)."""
+    found = _fit_covariance(curve, params, fitted, reference, replicates, closed_form)
+    return None if found is None else found[:2]
 
 
 def fit_standard_errors(curve: Callable[[dict], np.ndarray], params: dict, fitted: list[str],
@@ -254,11 +289,33 @@ def _finite_or_none(values) -> list[float | None]:
     return [float(v) if np.isfinite(v) else None for v in values]
 
 
+def estimator_map(J: np.ndarray, names: list[str], gradients: dict | None = None):
+    """(M, touched): the linearised estimator d ln p = M e (m x N) of the parameters ``names``
+    for a small change e of the fitted curve's rows (J = dF / d ln p over ``names``), and the
+    mask of the parameters the curve does not determine.  Least squares for all:
+    M = (J^T J)^+ J^T.  A parameter in ``gradients`` (name -> d ln p / dF on the rows) is
+    taken from a closed form (eq. 13): its row of M is that gradient, and the least-squares
+    ones fit what it leaves, M_f = (J_f^T J_f)^+ J_f^T (I - J_c G).  Cov(ln p) = s^2 M M^T
+    for rows with independent noise of variance s^2."""
+    gradients = gradients or {}
+    closed = np.array([n in gradients for n in names])
+    G = np.array([gradients[n] for n in names if n in gradients]).reshape(-1, J.shape[0])
+    P, V, keep = _pseudo_inverse(J[:, ~closed])
+    M = np.zeros((len(names), J.shape[0]))
+    M[closed] = G
+    M[~closed] = P - (P @ J[:, closed]) @ G
+    touched = np.zeros(len(names), dtype=bool)
+    touched[~closed] = np.linalg.norm(V[:, ~keep], axis=1) > SHARE
+    return M, touched
+
+
 def fit_statistics(curve: Callable[[dict], np.ndarray], params: dict, names: list[str],
-                   u, replicates) -> dict | None:
+                   u, replicates, gradients: dict | None = None) -> dict | None:
     """Fisher standard errors, correlation and chi-square of a fit ``params`` to the mean of
     ``replicates`` (n x N forces on the measured rows ``u``); ``curve(p)``: the model's force
-    on ``u``; ``names``: every parameter the data set (fitted or by a closed form).
+    on ``u``; ``names``: every parameter the data set, by least squares or, those in
+    ``gradients`` (name -> d ln p / dF on the rows of the mean), by a closed form: the
+    covariance is that of the estimator (:func:`estimator_map`): s_mean^2 M M^T.
 
     Returns {"noise_sigma_N": s of one specimen's rows (rms over the specimens),
     "names", "standard_error": {name: SE of ln p or None}, "correlation": matrix,
@@ -281,9 +338,12 @@ def fit_statistics(curve: Callable[[dict], np.ndarray], params: dict, names: lis
     norms = np.linalg.norm(J, axis=0)
     if norms.min() < BOUNDARY * norms.max():
         return None
-    cov = log_covariance(J, variance)
-    P = _pseudo_inverse(J)[0]
-    band = prediction_band(J, variance * P @ P.T)    # J (J^T J)^+ J^T: finite in any case
+    M, touched = estimator_map(J, list(names), gradients)
+    cov = variance * M @ M.T
+    cov = 0.5 * (cov + cov.T)                     # symmetric to the last digit
+    band = prediction_band(J, cov)                # on the determined directions: finite
+    cov[touched, :] = np.inf
+    cov[:, touched] = np.inf
     return {"noise_sigma_N": float(np.sqrt(s2.mean())), "names": list(names), "band_N": band,
             "standard_error": dict(zip(names, _finite_or_none(np.sqrt(np.diag(cov))))),
             "correlation": correlation(cov),
@@ -291,27 +351,33 @@ def fit_statistics(curve: Callable[[dict], np.ndarray], params: dict, names: lis
 
 
 def fit_summary(curve: Callable[[dict], np.ndarray], params: dict, fitted: list[str], u,
-                replicates, closed_form: dict | None = None) -> dict:
+                replicates, closed_form: dict | None = None, gradients: dict | None = None) -> dict:
     """Everything fit.json says about the uncertainty of a fit ``params`` to the mean of
     ``replicates`` (n x N forces on the measured rows ``u``; ``curve(p)``: model force on u):
 
     * ``standard_error``, ``standard_error_dof``, ``replicate_correlation``: the replicate
       sandwich (:func:`fit_covariance`; ``fitted`` by least squares, ``closed_form`` name ->
       value on each replicate), or the single curve's residual;
-    * ``fisher``, ``chi_square``: :func:`fit_statistics` over every parameter in ``params``;
-    * ``band_N``: the Fisher standard deviation of the fitted curve on ``u`` (an array, for
-      the stage to put beside its curve, not into fit.json).
+    * ``fisher``, ``chi_square``: :func:`fit_statistics` over every parameter in ``params``
+      (``gradients``: those of the closed-form ones on the rows of the mean);
+    * ``band_N``: the Fisher standard deviation of the fitted curve on ``u``, and
+      ``band_replicate_N`` that of the replicate sandwich (:func:`replicate_band`; None
+      without replicates or on a boundary): arrays, for the stage to put beside its curve,
+      not into fit.json.
     Entries that cannot be computed are None."""
     R = np.atleast_2d(np.asarray(replicates, dtype=float))
     reps = R if len(R) >= 2 else None
-    found = fit_covariance(curve, params, fitted, R.mean(axis=0), reps, closed_form)
-    stats_ = fit_statistics(curve, params, list(params), u, R)
+    found = _fit_covariance(curve, params, fitted, R.mean(axis=0), reps, closed_form)
+    stats_ = fit_statistics(curve, params, list(params), u, R, gradients)
     out = {"standard_error": None, "standard_error_dof": error_dof(R.shape[1], fitted, reps),
-           "replicate_correlation": None, "fisher": None, "chi_square": None, "band_N": None}
+           "replicate_correlation": None, "fisher": None, "chi_square": None, "band_N": None,
+           "band_replicate_N": None}
     if found is not None:
-        names, cov = found
+        names, cov, J, C = found
         out["standard_error"] = dict(zip(names, _finite_or_none(np.sqrt(np.diag(cov)))))
         out["replicate_correlation"] = {"names": names, "matrix": correlation(cov)}
+        if reps is not None and J is not None:
+            out["band_replicate_N"] = replicate_band(J, reps, C)
     if stats_ is not None:
         out["chi_square"] = stats_.pop("chi_square")
         out["band_N"] = stats_.pop("band_N")
@@ -337,18 +403,30 @@ def fisher_covariance(fisher: dict | None) -> np.ndarray | None:
 
 
 def curve_bands(summary: dict, params: dict, u, curve, strains) -> tuple[object, dict]:
-    """The report's bands of a fit, from :func:`fit_summary`'s ``summary`` (its ``band_N`` on
-    the rows ``u`` is popped): ``curve`` (displacement_mm, force_N) with a column ``band_N``,
-    the 95 % half-width Z95 sd(F) interpolated from the rows onto the curve's grid (NaN
-    outside the rows), and fit.json's ``flow_stress`` {eps_p, sigma, band}: eq. 2 and its 95 %
-    half-width (:func:`flow_stress_band` with :func:`fisher_covariance`; band None when that
-    is missing) at FLOW_POINTS plastic strains spaced geometrically over ``strains``' span.
-    No model runs: J is the one :func:`fit_statistics` computed."""
-    band = summary.pop("band_N", None)
+    """The report's bands of a fit, from :func:`fit_summary`'s ``summary`` (its ``band_N`` and
+    ``band_replicate_N`` on the rows ``u`` are popped): ``curve`` (displacement_mm, force_N)
+    with the columns
+
+    * ``band_N``: the Fisher 95 % half-width Z95 sd(F) (load-cell noise: the tested
+      specimens' curve),
+    * ``band_replicate_N``: the replicate sandwich's 95 % half-width t sd(F), t Student's
+      quantile on ``standard_error_dof`` (4.30 for three specimens: the population's mean
+      curve; the spread of one new specimen is sqrt(n + 1) times wider),
+
+    interpolated from the rows onto the curve's grid (NaN outside the rows or where the
+    summary has none), and fit.json's ``flow_stress`` {eps_p, sigma, band}: eq. 2 and its
+    95 % half-width (:func:`flow_stress_band` with :func:`fisher_covariance`; band None when
+    that is missing) at FLOW_POINTS plastic strains spaced geometrically over ``strains``'
+    span.  No model runs: J is the one :func:`fit_statistics` and the sandwich computed."""
     curve = curve.copy()
     x = np.asarray(curve["displacement_mm"], dtype=float)
-    curve["band_N"] = (np.full(x.size, np.nan) if band is None
-                       else Z95 * np.interp(x, u, band, left=np.nan, right=np.nan))
+    dof = summary.get("standard_error_dof")
+    quantiles = {"band_N": Z95,
+                 "band_replicate_N": float(stats.t.ppf(0.975, dof)) if dof else np.nan}
+    for column, q in quantiles.items():
+        sd = summary.pop(column, None)
+        curve[column] = (np.full(x.size, np.nan) if sd is None
+                         else q * np.interp(x, u, sd, left=np.nan, right=np.nan))
     eps = np.geomspace(min(strains), max(strains), FLOW_POINTS)
     fisher = summary.get("fisher")
     cov = fisher_covariance(fisher)

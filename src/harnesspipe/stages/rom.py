@@ -47,7 +47,8 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
     fit.json holds, besides the parameters, their uncertainty
     (:func:`harnesspipe.calibrate.rom.fit_uncertainty`), ``rows``, the rows fitted, and
     ``flow_stress`` (eq. 2 and its 95 % band over ``rom.reference_strains``' span); curve.csv
-    the fitted curve's 95 % band ``band_N`` (:func:`harnesspipe.calibrate.uncertainty.curve_bands`)."""
+    the fitted curve's 95 % half-widths ``band_N`` (Fisher) and ``band_replicate_N`` (replicate
+    sandwich; NaN on a hi-fi reference) (:func:`harnesspipe.calibrate.uncertainty.curve_bands`)."""
     outdir = Path(outdir)
     u, forces, test_id, source = reference_curve(reference, settings)
     F_ref = forces.mean(axis=0)

@@ -17,6 +17,7 @@ import pandas as pd
 
 from harnesspipe.calibrate import tensile as tcal
 from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
+from harnesspipe.calibrate.profile import fit_intervals
 from harnesspipe.calibrate.uncertainty import curve_bands, fit_summary
 from harnesspipe.models import tensile as tmodel
 from harnesspipe.report import plots
@@ -29,9 +30,11 @@ TABLE2_COLUMNS = ["component", "E", "sigma_y", "K", "n"]
 def fit_component(component: str, reference: Path, settings: dict, outdir: Path) -> dict:
     """Calibrate one covering on every measured row; write fit.json, curve.csv, trace.h5
     and fit.png.  fit.json holds, besides the parameters, their uncertainty
-    (:func:`harnesspipe.calibrate.uncertainty.fit_summary`) and ``rows``, the number of
+    (:func:`harnesspipe.calibrate.uncertainty.fit_summary`), their 95 % intervals ``interval95``
+    (:func:`harnesspipe.calibrate.profile.fit_intervals`) and ``rows``, the number of
     measured rows fitted, and ``flow_stress`` (eq. 2 and its 95 % band over the plastic
-    strains of the flow-stress coordinates); curve.csv the fitted curve's 95 % band ``band_N``
+    strains of the flow-stress coordinates); curve.csv the fitted curve's 95 % half-widths
+    ``band_N`` (Fisher) and ``band_replicate_N`` (replicate sandwich)
     (:func:`harnesspipe.calibrate.uncertainty.curve_bands`)."""
     outdir = Path(outdir)
     ref = read_prepared(reference)
@@ -62,6 +65,8 @@ def fit_component(component: str, reference: Path, settings: dict, outdir: Path)
         c = simulate(p)
         return np.interp(u_rows, c["displacement_mm"], c["force_N"])
     extra.update(fit_summary(on_rows, params, list(TABLE2_COLUMNS[1:]), u_rows, F_rows))
+    extra["interval95"] = fit_intervals(on_rows, params, list(TABLE2_COLUMNS[1:]), u_rows, F_rows,
+                                        extra["fisher"])
     extra["rows"] = int(u_rows.size)
     strains = tcal.FABRIC_STRAINS if component == "fabric_tube" else tcal.TUBE_STRAINS
     curve, extra["flow_stress"] = curve_bands(extra, params, u_rows, simulate(params), strains)
