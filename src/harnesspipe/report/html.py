@@ -882,8 +882,11 @@ def parameters_section(rows: list, cfg: dict, truth: dict) -> str:
             values += ["" if r.truth is None else f"{r.truth:g}"] if truth else []
             values += ["" if r.error is None else f"{100 * r.error:.1f} % ({100 * r.goal:.0f} %)"]
             cells += "".join(f"<td>{html.escape(v)}</td>" for v in values)
-            bound = f" <span class='note'>[{r.bound[0]:g}, {r.bound[1]:g}]</span>" if r.bound else ""
-            cells += f"<td class='txt'>{_status_badges(r.statuses)}{bound}</td>"
+            badges = _status_badges(r.statuses)
+            if r.bound:   # the interval right after its badge
+                badge = _status_badges([verdict.ON_BOUND])
+                badges = badges.replace(badge, f"{badge} <span class='note'>[{r.bound[0]:g}, {r.bound[1]:g}]</span>")
+            cells += f"<td class='txt'>{badges}</td>"
             body.append(f"<tr>{cells}</tr>")
     legend = ("<p class='note'>" + "; ".join(f"{_status_badges([st])} {html.escape(m)}"
                                              for st, m in STATUS_MEANING.items())

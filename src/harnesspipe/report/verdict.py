@@ -30,6 +30,7 @@ import pandas as pd
 from harnesspipe.calibrate.hardening import N_MAX
 from harnesspipe.calibrate.objective import relative_l2_error
 from harnesspipe.report.names import physical_name
+from harnesspipe.stages.chain_settings import STEPS as CHAIN_STEPS
 from harnesspipe.stages.common import read_fit
 
 DETERMINED, UNDETERMINED = 0.05, 0.3   # relative standard error: "determined" below, "not" above
@@ -231,7 +232,10 @@ def hifi_rows(results: Path, cfg: dict) -> list[Row]:
     pipe = cfg["hifi"]["pipeline"]
     paper = cfg["paper"].get("interface", {})
     rows = []
-    for path in sorted((results / "hifi" / "chain").glob("*/fit.json")):
+    order = list(CHAIN_STEPS)
+    steps = sorted((results / "hifi" / "chain").glob("*/fit.json"),
+                   key=lambda p: (order.index(p.parent.name) if p.parent.name in order else len(order), p.parent.name))
+    for path in steps:
         fit = read_fit(path)
         errors = []
         for case in fit.get("cases", []):
@@ -291,7 +295,10 @@ def _span(values) -> str:
 
 
 def _names(rows, cfg) -> str:
-    return "; ".join(f"{SYMBOLS.get(r.parameter, r.parameter)} of {physical_name(r.item, cfg)}" for r in rows)
+    """'sigma_Y of <item>; mu_rtb (hi-fi interface); ...'."""
+    return "; ".join(f"{SYMBOLS.get(r.parameter, r.parameter)} (hi-fi interface)" if r.stage == "hifi"
+                     else f"{SYMBOLS.get(r.parameter, r.parameter)} of {physical_name(r.item, cfg)}"
+                     for r in rows)
 
 
 def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
@@ -348,7 +355,7 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
                    f"{_pct(UNDETERMINED)}, or stopped by the fit's identifiability screen).")
     nose = [r for r in rows if NO_SE in r.statuses]
     if nose:
-        stages = sorted({STAGE_NAMES[r.stage] for r in nose})
+        stages = list(dict.fromkeys(STAGE_NAMES[r.stage] for r in nose))
         out.append(f"{len(nose)} parameter{'s carry' if len(nose) > 1 else ' carries'} no standard error "
                    f"({', '.join(stages)}): how well the data fix {'them' if len(nose) > 1 else 'it'} is not known.")
     for stage, paths in fits.items():
