@@ -107,7 +107,7 @@ def data_section(summary: str, prepared_paths: list[Path], truth: dict, cfg: dic
     for p in sorted(prepared_paths):
         pr = read_prepared(p)
         prov = pr.entry.get("provenance", {})
-        name = physical_name(pr.entry["item"], cfg or {})
+        name = physical_name(pr.test_id, cfg or {})
         rows.append([pr.test_id, pr.entry["kind"], name, len(pr.samples),
                      prov.get("kind", "?"), prov.get("generator_version", "")])
         figs.append(_img(plots.fit_figure(pr, title=f"{name} ({pr.test_id})"), pr.test_id))
@@ -139,6 +139,8 @@ def _standard_error_cells(fit: dict, names) -> list[str]:
     """The 'standard error' cells of a fit's parameters: 'n/a' when the fit has none (a hi-fi
     reference, a failed perturbed run), '' for a parameter it does not list."""
     se = fit.get("standard_error")
+    if not se and fit.get("reference") == "hifi":    # no noise: a standard error has no meaning
+        return ["none (fitted to one hi-fi curve)"] * len(names)
     if not se:
         return ["n/a"] * len(names)
     return [_standard_error(se[k]) if k in se else "" for k in names]
@@ -252,7 +254,7 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
     rows = [[label] + [fit["parameters"][k] for k in names]]
     shown = "standard_error" in fit and fit.get("reference") != "hifi"
     if shown:
-        rows.append(["standard error"] + _standard_error_cells(fit, names))
+        rows.append(["standard error (replicates)"] + _standard_error_cells(fit, names))
     if truth:
         rows.append([("truth of the test (synthetic)" if reference is not None else "truth (synthetic)")]
                     + [truth.get(k, "") for k in names])
@@ -345,7 +347,7 @@ def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth:
                  + ROM_NOTE + _table(["case", "fitted to", "error vs that reference", "error vs measured test",
                                       "goal (role)", "verdict"], rom_errs))
     else:
-        table = _table(["item", "parameter", "fitted", "standard error", "truth (synthetic)",
+        table = _table(["item", "parameter", "fitted", "standard error (replicates)", "truth (synthetic)",
                         f"paper ({table_name})"], summary)
     return f"<h2 id='{stage}'>{html.escape(heading)}</h2>{table}{''.join(blocks)}"
 
@@ -845,7 +847,8 @@ def verdict_section(rows: list, cfg: dict) -> str:
         body.append(f"<tr><td><a href='#{stage}'>{html.escape(verdict.STAGE_NAMES[stage])}</a></td>"
                     f"<td>{len(sr)} in {len(items)} item{'s' if len(items) > 1 else ''}</td>"
                     f"<td class='{'bad' if bad else ''}'>{err}</td>"
-                    f"<td style='white-space:nowrap'>{' / '.join(f'{100 * g:.0f} %' for g in goals)}</td><td style='text-align:left'>{_counts(sr)}</td></tr>")
+                    f"<td style='white-space:nowrap'>{' / '.join(f'{100 * g:.0f} %' for g in goals)}</td>"
+                    f"<td style='text-align:left'>{_counts(sr)}</td></tr>")
     head = "".join(f"<th>{h}</th>" for h in ("stage", "calibrated parameters", "fit error vs the tests",
                                              "goal", "status of the parameters"))
     return (f"<h2 id='verdict'>Verdict</h2><p><b>{len(rows)} calibrated parameters</b> "
