@@ -146,7 +146,7 @@ def _standard_error_cells(fit: dict, names) -> list[str]:
     return [_standard_error(se[k]) if k in se else "" for k in names]
 
 
-DETERMINED, UNDETERMINED = 0.05, 0.3   # standard error of ln p: "determines" below, "does not" above
+DETERMINED, UNDETERMINED = verdict.DETERMINED, verdict.UNDETERMINED   # SE of ln p: "determines" below, "not" above
 SYMBOLS = {"E": "E", "sigma_y": "sigma_Y", "K": "K", "n": "n"}
 
 

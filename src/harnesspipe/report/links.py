@@ -36,15 +36,17 @@ def href(target: Path, report_dir: Path) -> str:
     return Path(os.path.relpath(Path(target).resolve(), Path(report_dir).resolve())).as_posix()
 
 
-def link(target: Path, report_dir: Path, text: str | None = None) -> str:
-    """An <a> to ``target`` (its file name as text unless given)."""
-    return (f'<a href="{html.escape(href(target, report_dir))}">'
+def link(target: Path, report_dir: Path, text: str | None = None, title: str = "") -> str:
+    """An <a> to ``target`` (its file name as text unless given; ``title``: what it holds)."""
+    tip = f' title="{html.escape(title)}"' if title else ""
+    return (f'<a href="{html.escape(href(target, report_dir))}"{tip}>'
             f"{html.escape(text or Path(target).name)}</a>")
 
 
 def folder_links(folder: Path, report_dir: Path, files=FIT_FILES) -> str:
     """'fit.json · curve.csv · ...' for the files of ``files`` that exist in ``folder``."""
-    found = [link(Path(folder) / name, report_dir) for name, _ in files if (Path(folder) / name).exists()]
+    found = [link(Path(folder) / name, report_dir, title=what) for name, what in files
+             if (Path(folder) / name).exists()]
     return ('<p class="files">Files: ' + " \u00b7 ".join(found) + "</p>") if found else ""
 
 
@@ -67,7 +69,8 @@ def files_section(results: Path, report_dir: Path, label) -> str:
                            ("branch/hifi/summary.json", RUN_FILES)):
         for p in sorted(results.glob(pattern)):
             folder = p.parent
-            found = [link(folder / name, report_dir) for name, _ in files if (folder / name).exists()]
+            found = [link(folder / name, report_dir, title=what) for name, what in files
+                     if (folder / name).exists()]
             rel = folder.relative_to(results).as_posix()
             rows.append((f"<code>{html.escape(rel)}/</code>",
                          html.escape(label(folder.name)) + ": " + " \u00b7 ".join(found)))
