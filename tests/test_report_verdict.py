@@ -187,8 +187,10 @@ def test_raw_data_and_repeats_folded_and_physical_names(tree):
     assert "Parameter correlations (Fisher" in page and "+0.50</td>" in page
     assert 'alt="branch alpha overlay"' in page
     rom = page[page.index("id='rom'"):page.index("id='branch'")]
-    assert "<th>fitted</th><th>fitted to</th>" in rom and "recovered" not in page
-    assert "<td>6.0 %</td><td>47.0 %</td>" in rom
+    assert "<td class='txt'>fitted to the hi-fi virtual test</td>" in rom and "recovered" not in page
+    assert "<td>0.0001 <span class='status st-bound'>on a bound</span></td>" in rom
+    assert ("<td>6.0 %</td><td>47.0 % (10 %, calibration) <span class='status st-mismatch'>model does not "
+            "match the test</span></td>") in rom
 
 
 def test_physical_names_from_the_config():

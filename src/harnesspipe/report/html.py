@@ -317,7 +317,7 @@ def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth:
     the band shown beside a hi-fi reference; ``rows``: the verdict's rows (bound flags)."""
     heading, _, table_name = STAGES[stage]
     flags = {(r.item, r.parameter): r for r in (rows or []) if r.stage == stage}
-    blocks, summary, rom_errs = [], [], []
+    blocks, summary, rom_rows = [], [], []
     for path in sorted(fits):
         fit = read_fit(path)
         prepared, reference = _reference_of(fit, results, measured)
@@ -332,7 +332,8 @@ def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth:
                             (paper or {}).get("alpha", "")])
             continue
         if errors:
-            rom_errs.append(_rom_error_row(fit, errors, cfg))
+            rom_rows.append(_rom_rows(fit, errors, paper, tr, flags, cfg))
+            continue
         cells = _standard_error_cells(fit, list(fit["parameters"]))
         fitted_to = [errors["fitted_to"]] if errors else []
         for (k, v), cell in zip(fit["parameters"].items(), cells):
@@ -342,33 +343,50 @@ def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth:
         table = (_table(["test", "run", "role", "alpha [s]", "relative error vs test", "paper (Sec. 5)"], summary)
                  + _branch_overlay(fits, results, cfg))
     elif stage == "rom":
-        table = (_table(["case", "parameter", "fitted", "fitted to", "standard error",
-                         "truth of the test (synthetic)", f"paper ({table_name})"], summary)
-                 + ROM_NOTE + _table(["case", "fitted to", "error vs that reference", "error vs measured test",
-                                      "goal (role)", "verdict"], rom_errs))
+        table = ROM_NOTE + _rom_table(rom_rows)
     else:
         table = _table(["item", "parameter", "fitted", "standard error (replicates)", "truth (synthetic)",
                         f"paper ({table_name})"], summary)
     return f"<h2 id='{stage}'>{html.escape(heading)}</h2>{table}{''.join(blocks)}"
 
 
-ROM_NOTE = ("<p class='note'>Each ROM is fitted to the curve named in \"fitted to\" (config "
-            "<code>rom.reference</code>); its error is given against that curve and against the "
-            "measured mean of the case's test, with the goal of the case's role "
-            "(<code>hifi.pipeline.fidelity_goal</code>).</p>")
+ROM_NOTE = ("<p class='note'>Each ROM is fitted to the curve in its first row (config "
+            "<code>rom.reference</code>); its relative l2 error is given against that curve and "
+            "against the measured mean of the case's test, beside the goal of the case's role "
+            "(<code>hifi.pipeline.fidelity_goal</code>). A ROM fitted to one deterministic hi-fi "
+            "curve has no standard error (no noise to propagate).</p>")
+ROM_SYMBOLS = ("E", "sigma_y", "K", "n")
 
 
-def _rom_error_row(fit: dict, errors: dict, cfg: dict) -> list:
+def _rom_rows(fit: dict, errors: dict, paper: dict | None, truth: dict | None, flags: dict, cfg: dict) -> str:
+    """The rows of one case in the ROM table: fitted (bound flags, errors against its
+    reference and the test), the paper's and the test's truth."""
     test = errors["test"]
     if test is None:
-        judged = "no test"
-    elif test <= errors["goal"]:
-        judged = "met"
+        verdict_cell = "no test"
     else:
-        judged = Raw(_status_badges([verdict.MISMATCH]))
-    return [physical_name(fit["item"], cfg), errors["fitted_to"], f"{100 * errors['reference']:.1f} %",
-            "" if test is None else f"{100 * test:.1f} %",
-            f"{100 * errors['goal']:.0f} % ({errors['role']})", judged]
+        bad = test > errors["goal"]
+        verdict_cell = (f"{100 * test:.1f} % ({100 * errors['goal']:.0f} %, {html.escape(errors['role'])})"
+                        + (" " + _status_badges([verdict.MISMATCH]) if bad else ""))
+    lines = [(f"fitted to the {html.escape(errors['fitted_to'])}",
+              [str(_fitted_cell(flags.get((fit["item"], k)), fit["parameters"][k])) for k in ROM_SYMBOLS],
+              [f"{100 * errors['reference']:.1f} %", verdict_cell])]
+    if paper:
+        lines.append(("paper (Table 3)", [f"{paper.get(k, ''):g}" for k in ROM_SYMBOLS], ["", ""]))
+    if truth:
+        lines.append(("truth of the test (synthetic)", [f"{truth[k]:.4g}" for k in ROM_SYMBOLS], ["", ""]))
+    name = (f"<td class='txt' rowspan='{len(lines)}'>{html.escape(physical_name(fit['item'], cfg))}<br>"
+            f"<code class='note'>{html.escape(fit['item'])}</code></td>")
+    return "".join(f"<tr>{name if k == 0 else ''}<td class='txt'>{label}</td>"
+                   + "".join(f"<td>{c}</td>" for c in values + errs) + "</tr>"
+                   for k, (label, values, errs) in enumerate(lines))
+
+
+def _rom_table(rows: list[str]) -> str:
+    """The ROM table: per case its fitted, paper's and true properties and its errors."""
+    head = "".join(f"<th>{h}</th>" for h in ("case", "", "E [MPa]", "sigma_Y [MPa]", "K [MPa]", "n [-]",
+                                             "rel. error vs its reference", "vs the test (goal)"))
+    return f"<div class='wide'><table class='verdict'><tr>{head}</tr>{''.join(rows)}</table></div>"
 
 
 BRANCH_ZOOM_MM = 5.0   # the second panel of the alpha overlay: where damping shows (eq. 15)
