@@ -526,23 +526,23 @@ class _HifiCost:
         self.rows.append([label, n, per_run, wall_s / 60.0])
 
 
-def _crosscheck_table(root: Path, paper: dict) -> str:
+def _crosscheck_table(root: Path, cfg: dict) -> str:
     """Table 3 by eq. 13 + simplex on the cross-check curves beside the paper's."""
     t3 = root / "crosscheck" / "table3.csv"
     if not t3.exists():
         return ""
     rows = []
     for r in pd.read_csv(t3).itertuples():
-        ref = paper.get("table3", {}).get(r.case, {})
+        ref = cfg.get("paper", {}).get("table3", {}).get(r.case, {})
         for k in ("E", "sigma_y", "K", "n"):
-            rows.append([r.case, k, getattr(r, k), ref.get(k, ""), _rel(getattr(r, k), ref.get(k))])
+            rows.append([physical_name(r.case, cfg), k, getattr(r, k), ref.get(k, ""), _rel(getattr(r, k), ref.get(k))])
     return ("<h3>Table 3 from hi-fi curves at the paper's parameters</h3>"
             "<p>eq. 13 + simplex (the ROM stage's fit) on each hi-fi curve "
             "(<code>results/hifi/crosscheck/table3.csv</code>).</p>"
             + _table(["case", "parameter", "hi-fi + ROM fit", "paper (Table 3)", "difference"], rows))
 
 
-def _crosscheck_rom_figures(root: Path) -> str:
+def _crosscheck_rom_figures(root: Path, cfg: dict) -> str:
     """The ROM fitted to each cross-check curve, over that curve."""
     figs = []
     for fit_path in sorted(root.glob("crosscheck/*/rom/fit.json")):
@@ -550,7 +550,7 @@ def _crosscheck_rom_figures(root: Path) -> str:
         hifi_curve = fit_path.parent.parent / "curve.csv"
         if hifi_curve.exists():
             figs.append(_img(plots.hifi_rom_figure(pd.read_csv(hifi_curve), pd.read_csv(fit_path.parent / "curve.csv"),
-                                                   title=f"{fit['item']}: ROM on the hi-fi curve"),
+                                                   title=f"{physical_name(fit['item'], cfg)}: ROM on the hi-fi curve"),
                              f"rom crosscheck {fit['item']}"))
     return '<div class="fit">' + "".join(figs) + "</div>" if figs else ""
 
@@ -750,8 +750,8 @@ def hifi_section(results: Path, cfg: dict, measured: dict, report_dir: Path | No
         return heading + NO_HIFI_NOTE
     paper = cfg.get("paper", {})
     ctx = _HifiContext(cfg, measured, report_dir)
-    parts = [heading, HIFI_INTRO, _fidelity_table(root, cfg, measured), _crosscheck_table(root, paper),
-             _crosscheck_rom_figures(root),
+    parts = [heading, HIFI_INTRO, _fidelity_table(root, cfg, measured), _crosscheck_table(root, cfg),
+             _crosscheck_rom_figures(root, cfg),
              _interface_table(root, fits, cfg)]
     parts += [_calibration_step(p, paper, ctx) for p in fits]
     parts += [_single_runs(root, runs, ctx), _cost_table(ctx.cost, paper.get("cost", {}))]
