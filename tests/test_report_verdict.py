@@ -232,3 +232,18 @@ def test_replicate_band_is_shaded_only_when_the_curve_has_it():
     [band] = [c for c in with_band.collections if c.get_label() == label]
     assert np.isclose(band.get_paths()[0].vertices[:, 1].max(), F_HIFI.max() + 2.0)
     assert not [c for c in plots.fit_figure(None, curve).axes[0].collections if "replicates" in c.get_label()]
+
+
+def test_without_virtual_tests_the_chain_steps_own_errors_are_named(tree):
+    """Before the virtual tests exist, a step missing its goal is named with its own error."""
+    import shutil
+    shutil.rmtree(tree["res"] / "hifi" / "virtual")
+    (tree["res"] / "hifi" / "chain" / "mu_rtb" / "fit.json").write_text(json.dumps({
+        **json.loads((tree["res"] / "hifi" / "chain" / "mu_rtb" / "fit.json").read_text()),
+        "per_case": {"cwb19_t2_closed": {"measured": {"error_rel": 0.3}}}}))
+    measured = report_html._measured_by_case(tree["prepared"])
+    rows = verdict.verdict_rows(tree["cfg"], tree["res"], tree["fits"], {}, measured)
+    text = " ".join(verdict.limitations(rows, tree["cfg"], tree["res"], tree["fits"], {}, measured))
+    assert ("The model misses its test by more than the goal for the hi-fi step mu_rtb (30 % against 10 %): "
+            "its fitted values compensate for what the model lacks.") in text
+    assert "virtual tests miss their goal" not in text

@@ -603,7 +603,7 @@ def _step_text(fit: dict, paper: dict, cfg: dict) -> str:
             + _table(["", *fit["parameters"]], [["fitted", *fit["parameters"].values()],
                                                  ["search interval", *[str(fit["bounds"]) if fit.get("bounds") else ""
                                                                        for _ in fit["parameters"]]],
-                                                 ["paper", *[paper.get("interface", {}).get(k, "")
+                                                 ["paper", *[paper.get("interface", {}).get(k, "not in the paper")
                                                              for k in fit["parameters"]]]]))
     if fit["item"] == "cohesive":
         text += COHESIVE_MESH_NOTE
