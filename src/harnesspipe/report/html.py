@@ -63,7 +63,7 @@ nav.toc ul{margin:.2em 0;padding-left:1.2em} nav.toc>ul{columns:2 22em}
 .st-unident{background:#fde2c4;color:#7a3b00} .st-nose{background:#e8e8e8;color:#444}
 .st-rough{background:#e6f2d0;color:#3a5a00} .st-ok{background:#cdeccd;color:#0a5a0a}
 details{margin:1em 0;border:1px solid #ddd;padding:.3em .8em} summary{cursor:pointer;font-weight:600}
-table.corr td{text-align:center;min-width:3.5em}
+table.corr td{text-align:center;min-width:3.5em} table.files td{text-align:left}
 table.verdict td{vertical-align:top;text-align:right} table.verdict td.txt{text-align:left}
 """
 
@@ -822,6 +822,24 @@ def _read_json_line(line: str) -> dict | None:
         return None
 
 
+BRANCH_RUNS = {"inplane": "Y harness, in-plane pull: alpha calibrated",
+               "elastic": "Y harness, in-plane pull: elastic joint (alpha = 0)",
+               "outofplane": "Y harness, out-of-plane pull: validation at the calibrated alpha",
+               "hifi": "Y harness, in-plane pull: hi-fi model"}
+
+
+def folder_name(rel: str, cfg: dict) -> str:
+    """What a result folder (path below results/) holds, in words."""
+    parts = rel.split("/")
+    if parts[0] == "branch":
+        return BRANCH_RUNS.get(parts[-1], parts[-1])
+    if parts[:2] == ["hifi", "chain"]:
+        return f"hi-fi calibration step {parts[-1]}"
+    prefix = {"virtual": "hi-fi virtual test: ", "crosscheck": "hi-fi at the paper's values: "}.get(
+        parts[1] if len(parts) > 2 else "", "")
+    return prefix + physical_name(parts[-1], cfg)
+
+
 SECTION_ORDER = ("tensile", "hifi", "rom", "branch")   # the chain's order (DESIGN sec. 2)
 STATUS_MEANING = {
     verdict.MISMATCH: "relative l2 error against the measured mean above the goal of its role "
@@ -993,7 +1011,7 @@ def build(out: Path, *, cfg: dict, results: Path, check_summary: Path,
                                           report_dir=report_dir))
             if stage == "branch":
                 sections.append(branch_hifi_section(results, cfg))
-    files = links.files_section(results, report_dir, lambda item: physical_name(item, cfg))
+    files = links.files_section(results, report_dir, lambda rel: folder_name(rel, cfg))
     if files:
         sections.append("<h2 id='files'>Result files</h2>" + files)
     body, toc = with_toc("".join(sections[3:]))

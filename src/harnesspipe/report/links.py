@@ -57,7 +57,8 @@ def _cards(results: Path) -> list[Path]:
 
 def files_section(results: Path, report_dir: Path, label) -> str:
     """Every take-away file that exists: the summary tables, each fit's and each hi-fi run's
-    files, and solver cards; ``label(item)`` names a fit or run folder."""
+    files, and solver cards; ``label(path)`` names a fit or run folder (its path below
+    ``results``)."""
     results = Path(results)
     rows = [(link(results / rel, report_dir, rel), html.escape(what))
             for rel, what in SUMMARY_TABLES if (results / rel).exists()]
@@ -73,7 +74,7 @@ def files_section(results: Path, report_dir: Path, label) -> str:
                      if (folder / name).exists()]
             rel = folder.relative_to(results).as_posix()
             rows.append((f"<code>{html.escape(rel)}/</code>",
-                         html.escape(label(folder.name)) + ": " + " \u00b7 ".join(found)))
+                         html.escape(label(rel)) + ": " + " \u00b7 ".join(found)))
     if not rows:
         return ""
     body = "".join(f"<tr><td>{a}</td><td>{b}</td></tr>" for a, b in rows)
