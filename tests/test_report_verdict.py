@@ -182,6 +182,9 @@ def test_raw_data_and_repeats_folded_and_physical_names(tree):
     assert "<details><summary>Raw data: the 3 tests' specimens, band and mean</summary>" in page
     assert "19 x type 2, closed tube (cwb19_t2_closed)" in page
     assert "KE/IE max [-] (limit 0.02 / reject 0.1)" in page          # units and limits, from config
+    assert "<td>0.05</td><td><span class='bad'>above 0.02</span></td>" in page    # KE/IE 0.05 > 2 %
+    assert "<td>0.001</td><td>within 0.01</td>" in page                           # energy balance
+    assert "<td>50.0 %</td><td><span class='bad'>above the goal 10 %</span></td>" in page
     assert "Optimiser: 1 evaluation (no trace drawn)." in page and "Optimiser: 2 evaluations" in page
     assert 'alt="trace closed_tube"' in page and 'alt="trace cohesive"' not in page
     assert "Parameter correlations (Fisher" in page and "+0.50</td>" in page

@@ -459,7 +459,8 @@ def solver_table(summary: dict, cfg: dict) -> list[list]:
         v = summary[key]
         check = ""
         if limit is not None:
-            check = Raw("<span class='bad'>above the limit</span>") if float(v) > float(limit) else "within"
+            check = (Raw(f"<span class='bad'>above {float(limit):g}</span>") if float(v) > float(limit)
+                     else f"within {float(limit):g}")
         rows.append([label, f"{v:.3g}" if isinstance(v, float) else v, check])
     return rows
 
@@ -482,7 +483,14 @@ def _hifi_run_block(title: str, folder: Path, measured, cfg: dict | None = None,
     m = summary.get("measured")
     if m:
         numbers.append([f"||e||_l2 vs test {m['test_id']} [N]", m["error_l2"], ""])
-        numbers.append(["relative error vs test [-]", f"{100 * m['error_rel']:.2f} %", ""])
+        goals = (cfg or {}).get("hifi", {}).get("pipeline", {}).get("fidelity_goal", {})
+        role = str(summary.get("role", "prediction")).split()[0]     # "calibration (mu_rtb)": a fit's run
+        goal = goals.get(role, goals.get("prediction"))
+        check = ""
+        if goal is not None:
+            check = (Raw(f"<span class='bad'>above the goal {100 * goal:.0f} %</span>") if m["error_rel"] > goal
+                     else f"within the goal {100 * goal:.0f} %")
+        numbers.append(["relative l2 error vs test", f"{100 * m['error_rel']:.1f} %", check])
     text = f"<h4>{html.escape(title)}</h4>" + _table(["quantity", "value", "check"], numbers)
     if report_dir is not None:
         text += links.folder_links(folder, report_dir, links.RUN_FILES)
