@@ -76,6 +76,8 @@ def tree(tmp_path):
     virtual = res / "hifi" / "virtual" / "cwb19_t2_closed"
     virtual.mkdir(parents=True)
     pd.DataFrame({"deflection_mm": U, "force_N": F_HIFI}).to_csv(virtual / "curve.csv", index=False)
+    pd.DataFrame({"deflection_mm": U, "KE": 0 * U, "internal": 11.0 * U, "contact": -U * 2 / 3,
+                  "W_ext": 10.0 * U}).to_csv(virtual / "energies.csv", index=False)
     (virtual / "summary.json").write_text(json.dumps(
         {"case": "cwb19_t2_closed", "role": "calibration", "wall_s": 20.0, "steps": 1000, "dt": 1e-4,
          "ke_ie_max": 0.05, "energy_error": 0.001, "contact_pairs_max": 12,
@@ -184,6 +186,7 @@ def test_raw_data_and_repeats_folded_and_physical_names(tree):
     assert "KE/IE max [-] (limit 0.02 / reject 0.1)" in page          # units and limits, from config
     assert "<td>0.05</td><td><span class='bad'>above 0.02</span></td>" in page    # KE/IE 0.05 > 2 %
     assert "<td>0.001</td><td>within 0.01</td>" in page                           # energy balance
+    assert "Below zero (contact -20 N mm; external work 300 N mm)" in page and "closes to 0.001" in page
     assert "<td>50.0 %</td><td><span class='bad'>above the goal 10 %</span></td>" in page
     assert "Optimiser: 1 evaluation (no trace drawn)." in page and "Optimiser: 2 evaluations" in page
     assert 'alt="trace closed_tube"' in page and 'alt="trace cohesive"' not in page

@@ -465,6 +465,25 @@ def solver_table(summary: dict, cfg: dict) -> list[list]:
     return rows
 
 
+def _negative_energy_note(history: pd.DataFrame, summary: dict) -> str:
+    """A note for energy families that end below zero (the energy a family absorbs is minus
+    the work its forces do on the nodes, integrated over the run, not a stored potential)."""
+    labels = dict(plots.ENERGY_COLUMNS)
+    low = {k: float(history[k].min()) for k in ("contact", "pin_contact", "friction", "cohesive")
+           if k in history and float(history[k].min()) < 0.0}
+    w_ext = float(history["W_ext"].iloc[-1]) if "W_ext" in history else float("nan")
+    low = {k: v for k, v in low.items() if abs(v) > 1e-3 * abs(w_ext)}
+    if not low:
+        return ""
+    listed = ", ".join(f"{labels.get(k, k)} {v:.3g} N mm" for k, v in low.items())
+    balance = summary.get("energy_error")
+    closes = f" to {balance:.2g} of the external work" if balance is not None else ""
+    return (f"<p class='note'>Below zero ({listed}; external work {w_ext:.3g} N mm): each energy curve is "
+            "the work absorbed by that family of forces, integrated over the run; it goes negative when "
+            "those forces return more work to the nodes than they took. The balance KE + absorbed "
+            f"energies = external work closes{closes}.</p>")
+
+
 def _hifi_run_block(title: str, folder: Path, measured, cfg: dict | None = None,
                     report_dir: Path | None = None) -> tuple[str, dict | None]:
     """Curve vs measured band, energies and the summary numbers of one hi-fi run."""
@@ -473,9 +492,11 @@ def _hifi_run_block(title: str, folder: Path, measured, cfg: dict | None = None,
         return "", None
     curve = pd.read_csv(folder / "curve.csv")
     figs = [_img(plots.hifi_curve_figure({"hi-fi": curve}, measured, title=title), f"hi-fi {title}")]
+    energy_note = ""
     if (folder / "energies.csv").exists():
-        figs.append(_img(plots.energies_figure(pd.read_csv(folder / "energies.csv"),
-                                               title=f"{title}: energies"), f"energies {title}"))
+        history = pd.read_csv(folder / "energies.csv")
+        figs.append(_img(plots.energies_figure(history, title=f"{title}: energies"), f"energies {title}"))
+        energy_note = _negative_energy_note(history, summary)
     if (folder / "shapes.png").exists():
         data = base64.b64encode((folder / "shapes.png").read_bytes()).decode()
         figs.append(f'<img alt="shapes {html.escape(title)}" src="data:image/png;base64,{data}">')
@@ -491,7 +512,7 @@ def _hifi_run_block(title: str, folder: Path, measured, cfg: dict | None = None,
             check = (Raw(f"<span class='bad'>above the goal {100 * goal:.0f} %</span>") if m["error_rel"] > goal
                      else f"within the goal {100 * goal:.0f} %")
         numbers.append(["relative l2 error vs test", f"{100 * m['error_rel']:.1f} %", check])
-    text = f"<h4>{html.escape(title)}</h4>" + _table(["quantity", "value", "check"], numbers)
+    text = f"<h4>{html.escape(title)}</h4>" + _table(["quantity", "value", "check"], numbers) + energy_note
     if report_dir is not None:
         text += links.folder_links(folder, report_dir, links.RUN_FILES)
     return f'<div>{text}<div class="fit">{"".join(figs)}</div></div>', summary
