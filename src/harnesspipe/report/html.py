@@ -372,9 +372,9 @@ def _rom_rows(fit: dict, errors: dict, paper: dict | None, truth: dict | None, f
               [str(_fitted_cell(flags.get((fit["item"], k)), fit["parameters"][k])) for k in ROM_SYMBOLS],
               [f"{100 * errors['reference']:.1f} %", verdict_cell])]
     if paper:
-        lines.append(("paper (Table 3)", [f"{paper.get(k, ''):g}" for k in ROM_SYMBOLS], ["", ""]))
+        lines.append(("paper (Table 3)", [f"{paper[k]:g}" if k in paper else "" for k in ROM_SYMBOLS], ["", ""]))
     if truth:
-        lines.append(("truth of the test (synthetic)", [f"{truth[k]:.4g}" for k in ROM_SYMBOLS], ["", ""]))
+        lines.append(("truth of the test (synthetic)", [f"{truth[k]:.4g}" if k in truth else "" for k in ROM_SYMBOLS], ["", ""]))
     name = (f"<td class='txt' rowspan='{len(lines)}'>{html.escape(physical_name(fit['item'], cfg))}<br>"
             f"<code class='note'>{html.escape(fit['item'])}</code></td>")
     return "".join(f"<tr>{name if k == 0 else ''}<td class='txt'>{label}</td>"

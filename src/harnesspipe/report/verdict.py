@@ -20,6 +20,7 @@ Statuses (a parameter can carry several; "determined" only when no other holds):
 """
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -190,7 +191,6 @@ def rom_errors(fit: dict, fit_dir: Path, results: Path, measured: dict, cfg: dic
     summary = results / "hifi" / "virtual" / case / "summary.json"
     role = "prediction"
     if summary.exists():
-        import json
         role = str(json.loads(summary.read_text()).get("role", role))
     test = None
     if case in measured:
@@ -217,7 +217,6 @@ def rom_rows(paths, cfg: dict, truth: dict, results: Path, measured: dict) -> li
 
 
 def _virtual_error(results: Path, case: str) -> float | None:
-    import json
     path = results / "hifi" / "virtual" / case / "summary.json"
     if not path.exists():
         return None
@@ -310,7 +309,6 @@ def _fit_name(row: Row, cfg: dict) -> str:
 
 def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
     """Each virtual test with a measured test: case, role, error, goal, force ratio."""
-    import json
     out = []
     for path in sorted((Path(results) / "hifi" / "virtual").glob("*/summary.json")):
         summary = json.loads(path.read_text())
