@@ -501,7 +501,8 @@ def test_hifi_report_section(tmp_path, fake):
              "error_rel": 0.01, "nfev": 1, "converged": True, "parameters": {"mu_rtb": 0.3}}))
         (step / "curve.csv").write_text("case,deflection_mm,force_N\n")
     page = hifi_section(tmp_path, cfg, _measured_by_case([ref]))
-    assert "virtual test cwb19_t2_closed" in page and "Calibrated interface" in page and "Cost" in page
+    assert "virtual test: 19 x type 2, closed tube (cwb19_t2_closed)" in page and "Calibrated interface" in page
+    assert "Cost" in page
     assert page.count("data:image/png;base64,") >= 2 and "281 min" in page
     cohesive = page.index("Calibration step cohesive")
     assert page.count(COHESIVE_MESH_NOTE) == 1 and page.index(COHESIVE_MESH_NOTE) > cohesive

@@ -62,6 +62,12 @@ def test_outputs_of_every_stage(project):
         assert heading in html
     assert (res / "rom" / "cwb19_t2_closed" / "shapes.pvd").exists()
     assert "http://" not in html and "https://" not in html  # nothing to fetch: opens offline
+    assert html.index("id='verdict'") < html.index("id='limitations'") < html.index("id='data'")
+    ids = set(re.findall(r"id='([^']+)'", html))
+    assert set(re.findall(r"href='#([^']+)'", html)) <= ids            # the contents' anchors exist
+    links = re.findall(r'href="([^"#][^"]*)"', html)
+    assert {"../rom/table3.csv", "../hifi/interface.csv", "../rom/cwb19_t2_closed/shapes.pvd"} <= set(links)
+    assert all((res / "report" / link).is_file() for link in links)    # every result link resolves
 
 
 def test_snakemake_report_collects_the_figures(project):

@@ -25,7 +25,8 @@ def test_each_virtual_test_is_met_or_missed_by_its_roles_goal(tmp_path):
     html = _fidelity_table(tmp_path, cfg)
     rows = html.split("<tr>")[2:]
     assert [r.split("</td>")[0].removeprefix("<td>") for r in rows] == [
-        "cwb19_t1_open_coarse", "cwb19_t2_closed", "cwb19_t2_fabric"]
+        "19 x type 1, open tube, coarse tape (cwb19_t1_open_coarse)",
+        "19 x type 2, closed tube (cwb19_t2_closed)", "19 x type 2, fabric tube, taped ends (cwb19_t2_fabric)"]
     assert "<td>met</td>" in rows[0] and "<td>met</td>" in rows[1]
     assert "<td class='bad'>missed by 4.0 points</td>" in rows[2]
     assert _fidelity_table(tmp_path / "nothing", cfg) == ""

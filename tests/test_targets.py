@@ -62,7 +62,7 @@ def test_hifi_y_harness_in_the_default_profile_only(tests):
     summary = f"{RES}/branch/hifi/summary.json"
     for profile, expected in (("default", [summary]), ("quick", [])):
         cfg = load(profile)
-        assert targets.report_extra(cfg, tests, RES) == expected
+        assert targets.report_extra(cfg, tests, RES) == targets.summary_tables(cfg, tests, RES) + expected
         assert (summary in targets.final_targets(cfg, tests, RES)) == bool(expected)
 
 
@@ -71,7 +71,7 @@ def test_branch_targets_need_both_pull_tests(tests):
     cfg = load("default")
     no_validation = {t: e for t, e in tests.items() if e.get("load_case") != "outofplane"}
     assert "branch" not in targets.stage_fits(cfg, no_validation, RES)
-    assert targets.report_extra(cfg, no_validation, RES) == []
+    assert targets.report_extra(cfg, no_validation, RES) == [f"{RES}/tensile/table2.csv", f"{RES}/rom/table3.csv"]
     final = targets.final_targets(cfg, no_validation, RES)
     assert not any(p.startswith(f"{RES}/branch/") for p in final)
 

@@ -1,14 +1,19 @@
 """The offline HTML report: one self-contained file, figures embedded as PNG data URIs.
 
-A section per stage that has results.  Every fit shows the measured band and
-mean, the simulated curve, the error norm, the fitted values beside the paper's
-and (for the synthetic twin) the truth, and the optimiser trace.
+It opens with the verdict (:mod:`harnesspipe.report.verdict`): every calibrated
+parameter with its standard error, its fit's error against the test and a status, and the
+limitations generated from those numbers; then a table of contents, and a section per
+stage that has results.  Every fit shows the measured band and mean, the simulated curve,
+the error norm, the fitted values beside the paper's and (for the synthetic twin) the
+truth, the parameter correlations and the optimiser trace; raw data and repeated runs are
+folded into ``<details>``; result files are linked relative to the report's folder.
 """
 from __future__ import annotations
 
 import base64
 import html
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -19,7 +24,8 @@ import pandas as pd
 from harnesspipe import __version__
 from harnesspipe.calibrate.uncertainty import Z95
 from harnesspipe.data.synthesize import read_truth
-from harnesspipe.report import plots
+from harnesspipe.report import links, plots, verdict
+from harnesspipe.report.names import labelled, physical_name, solver_statistics
 from harnesspipe.stages.common import read_fit
 from harnesspipe.stages.data import read_prepared
 
@@ -40,29 +46,50 @@ def paper_values(cfg: dict, stage: str, item: str) -> dict | None:
     return table.get(item)
 
 CSS = """
-body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}
-h1{font-size:1.6em} h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}
+body{font-family:system-ui,sans-serif;max-width:1240px;margin:1.5em auto;padding:0 1em;color:#222;line-height:1.4}
+h1{font-size:1.6em;margin-bottom:.2em} h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}
 table{border-collapse:collapse;margin:.6em 0} td,th{border:1px solid #ccc;padding:.25em .6em;text-align:right}
 th{background:#f3f3f3} td:first-child,th:first-child{text-align:left}
+.wide{overflow-x:auto;max-width:100%}
 .fit{display:flex;flex-wrap:wrap;gap:1em;align-items:flex-start;margin:1em 0 2em}
-.fit img{max-width:520px;border:1px solid #eee} .note{color:#555;font-size:.92em}
-.bad{color:#b00}
+.fit img,img{max-width:100%;height:auto;border:1px solid #eee} .note{color:#555;font-size:.92em}
+.bad{color:#b00} .files{font-size:.92em} code{font-size:.92em}
+nav.toc{background:#f7f7f7;border:1px solid #ddd;padding:.4em 1em;margin:1em 0;font-size:.95em}
+nav.toc ul{margin:.2em 0;padding-left:1.2em} nav.toc>ul{columns:2 22em}
+.limits{background:#fff6e5;border:1px solid #e0a030;border-left:6px solid #e0a030;padding:.3em 1em;margin:1em 0}
+.limits h2{border:0;margin-top:.4em}
+.status{display:inline-block;padding:0 .4em;margin:1px;border-radius:3px;font-size:.88em;white-space:nowrap}
+.st-mismatch{background:#f8d0d0;color:#800} .st-bound{background:#e8d8f8;color:#4b1a80}
+.st-unident{background:#fde2c4;color:#7a3b00} .st-nose{background:#e8e8e8;color:#444}
+.st-rough{background:#e6f2d0;color:#3a5a00} .st-ok{background:#cdeccd;color:#0a5a0a}
+details{margin:1em 0;border:1px solid #ddd;padding:.3em .8em} summary{cursor:pointer;font-weight:600}
+table.corr td{text-align:center;min-width:3.5em} table.files td{text-align:left}
+table.verdict td{vertical-align:top;text-align:right} table.verdict td.txt{text-align:left}
 """
 
 
+class Raw(str):
+    """A table cell that is HTML already (not escaped)."""
+
+
 def _img(fig, alt: str) -> str:
+    """A figure as an embedded PNG, shown at its own pixel size (never squeezed: the
+    figures are laid out for their shown width, legends >= 8 pt)."""
+    width = int(round(fig.get_size_inches()[0] * fig.dpi))
     data = base64.b64encode(plots.png_bytes(fig)).decode()
-    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{data}">'
+    return f'<img alt="{html.escape(alt)}" width="{width}" src="data:image/png;base64,{data}">'
 
 
 def _table(header: list[str], rows: list[list]) -> str:
     def cell(v):
+        if isinstance(v, Raw):
+            return str(v)
         if isinstance(v, float):
             return f"{v:.4g}"
         return html.escape(str(v))
     head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{cell(v)}</td>" for v in r) + "</tr>" for r in rows)
-    return f"<table><tr>{head}</tr>{body}</table>"
+    return f"<div class='wide'><table><tr>{head}</tr>{body}</table></div>"
 
 
 def _load_trace(path: Path) -> pd.DataFrame | None:
@@ -74,18 +101,21 @@ def _load_trace(path: Path) -> pd.DataFrame | None:
         return pd.DataFrame({"error": f["error"][...], "wall_s": f["wall_s"][...]})
 
 
-def data_section(summary: str, prepared_paths: list[Path], truth: dict) -> str:
+def data_section(summary: str, prepared_paths: list[Path], truth: dict, cfg: dict | None = None) -> str:
+    """The tests: a table, and their raw curves folded into a <details>."""
     rows, figs = [], []
     for p in sorted(prepared_paths):
         pr = read_prepared(p)
         prov = pr.entry.get("provenance", {})
-        rows.append([pr.test_id, pr.entry["kind"], pr.entry["item"], len(pr.samples),
+        name = physical_name(pr.test_id, cfg or {})
+        rows.append([pr.test_id, pr.entry["kind"], name, len(pr.samples),
                      prov.get("kind", "?"), prov.get("generator_version", "")])
-        figs.append(_img(plots.fit_figure(pr, title=pr.test_id), pr.test_id))
+        figs.append(_img(plots.fit_figure(pr, title=f"{name} ({pr.test_id})"), pr.test_id))
     synthetic = " The data set is the synthetic twin (data/experimental/README.md)." if truth else ""
-    return (f"<h2>Test data</h2><p>{html.escape(summary)}.{synthetic}</p>"
-            + _table(["test", "kind", "item", "samples", "provenance", "generator"], rows)
-            + '<div class="fit">' + "".join(figs) + "</div>")
+    return (f"<h2 id='data'>Test data</h2><p>{html.escape(summary)}.{synthetic}</p>"
+            + _table(["test", "kind", "specimen", "samples", "provenance", "generator"], rows)
+            + f"<details><summary>Raw data: the {len(figs)} tests' specimens, band and mean</summary>"
+            + '<div class="fit">' + "".join(figs) + "</div></details>")
 
 
 SE_NOTE = ('<p class="note">Standard error: how far the parameter could move for the scatter of '
@@ -109,17 +139,21 @@ def _standard_error_cells(fit: dict, names) -> list[str]:
     """The 'standard error' cells of a fit's parameters: 'n/a' when the fit has none (a hi-fi
     reference, a failed perturbed run), '' for a parameter it does not list."""
     se = fit.get("standard_error")
+    if not se and fit.get("reference") == "hifi":    # no noise: a standard error has no meaning
+        return ["none (fitted to one hi-fi curve)"] * len(names)
     if not se:
         return ["n/a"] * len(names)
     return [_standard_error(se[k]) if k in se else "" for k in names]
 
 
-DETERMINED, UNDETERMINED = 0.05, 0.3   # standard error of ln p: "determines" below, "does not" above
+DETERMINED, UNDETERMINED = verdict.DETERMINED, verdict.UNDETERMINED   # SE of ln p: "determines" below, "not" above
 SYMBOLS = {"E": "E", "sigma_y": "sigma_Y", "K": "K", "n": "n"}
 
 
 def _pct(se) -> str:
-    return "not determined" if se is None else f"\u00b1{100.0 * se:.2g} %"
+    if se is None:
+        return "not determined"
+    return "> 100 %" if se > 1.0 else f"\u00b1{100.0 * se:.2g} %"
 
 
 def _listed(items: list[str]) -> str:
@@ -172,69 +206,206 @@ def determination_sentence(fit: dict) -> str | None:
             "shaded bands are 95 %.)")
 
 
+def correlation_table(fit: dict) -> str:
+    """The Fisher correlation matrix of a fit's parameters (fit.json ``fisher.correlation``)
+    as a small table shaded by |r| (red positive, blue negative); "" without one."""
+    fisher = fit.get("fisher") or {}
+    names, matrix = fisher.get("names"), fisher.get("correlation")
+    if not names or matrix is None:
+        return ""
+
+    def cell(r):
+        if r is None or not math.isfinite(r):
+            return "<td>-</td>"
+        colour = "200,40,40" if r > 0 else "40,80,200"
+        return f"<td style='background:rgba({colour},{0.55 * min(abs(r), 1.0):.2f})'>{r:+.2f}</td>"
+    head = "".join(f"<th>{html.escape(SYMBOLS.get(k, k))}</th>" for k in names)
+    body = "".join(f"<tr><th>{html.escape(SYMBOLS.get(k, k))}</th>" + "".join(cell(r) for r in row) + "</tr>"
+                   for k, row in zip(names, matrix))
+    return ("<p class='note'>Parameter correlations (Fisher, of ln p): near +-1, the curve fixes only "
+            "a combination of the two.</p>"
+            f"<table class='corr'><tr><th></th>{head}</tr>{body}</table>")
+
+
+def _trace_or_count(trace: pd.DataFrame | None, title: str, alt: str) -> tuple[str, str]:
+    """(figure, text): the optimiser trace when there are more than two evaluations, else
+    a note with their number (a trace of one or two points says nothing)."""
+    if trace is None or not len(trace):
+        return "", ""
+    if len(trace) <= 2:
+        n = len(trace)
+        return "", f"<p class='note'>Optimiser: {n} evaluation{'s' if n > 1 else ''} (no trace drawn).</p>"
+    return _img(plots.trace_figure(trace, title=title), alt), ""
+
+
 def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dict | None,
-              reference: pd.DataFrame | None = None) -> str:
+              reference: pd.DataFrame | None = None, *, cfg: dict | None = None,
+              report_dir: Path | None = None, errors: dict | None = None) -> str:
     """One fit: values beside truth and paper, the curve (with its 95 % band) against the
     measured band (``prepared``, may be None) and, for a ROM fitted to a hi-fi virtual test,
-    that ``reference`` curve; the flow stress with its band and :func:`determination_sentence`."""
+    that ``reference`` curve (``errors``: :func:`verdict.rom_errors`); the flow stress with its
+    band, :func:`determination_sentence`, the parameter correlations and links to its files
+    (``report_dir``: the report's folder)."""
+    cfg = cfg or {}
     curve = pd.read_csv(fit_dir / "curve.csv")
     names = list(fit["parameters"])
-    label = "fitted" if fit.get("role", "calibration") == "calibration" else f"used ({fit['role']}, no refit)"
+    role = fit.get("role", "calibration")
+    label = {"calibration": "fitted", "validation": "used (validation, no refit)"}.get(role, f"fixed ({role}, no fit)")
     rows = [[label] + [fit["parameters"][k] for k in names]]
     shown = "standard_error" in fit and fit.get("reference") != "hifi"
     if shown:
-        rows.append(["standard error"] + _standard_error_cells(fit, names))
+        rows.append(["standard error (replicates)"] + _standard_error_cells(fit, names))
     if truth:
-        rows.append(["truth (synthetic)"] + [truth.get(k, "") for k in names])
+        rows.append([("truth of the test (synthetic)" if reference is not None else "truth (synthetic)")]
+                    + [truth.get(k, "") for k in names])
     if paper:
         rows.append(["paper"] + [paper.get(k, "") for k in names])
     status = "" if fit["converged"] else ' <span class="bad">(optimiser did not converge)</span>'
-    text = (f"<h3>{html.escape(fit['item'])}</h3>"
-            f"<p>Reference: test <code>{html.escape(fit['test_id'])}</code>. "
+    against = "the hi-fi virtual test" if reference is not None else f"test <code>{html.escape(fit['test_id'])}</code>"
+    verb = "Fitted to" if role == "calibration" else "Against"
+    text = (f"<h3>{html.escape(labelled(fit['item'], cfg))}</h3>"
+            f"<p>{verb} {against}: "
             f"||e||<sub>l2</sub> = {fit['error_l2']:.4g} N (relative {100 * fit['error_rel']:.2f} %), "
-            f"{fit['nfev']} evaluations, {fit['wall_s']:.1f} s.{status}</p>"
-            + _table(["", *names], rows)
-            + (SE_NOTE.format(dof=fit.get("standard_error_dof", "?")) if shown else ""))
+            f"{fit['nfev']} evaluation{'s' if fit['nfev'] != 1 else ''}, {fit['wall_s']:.1f} s.{status}")
+    if errors and errors.get("test") is not None and prepared is not None:
+        bad = errors["test"] > errors["goal"]
+        text += (f" Against the measured mean (test <code>{html.escape(prepared.test_id)}</code>): "
+                 f"<span class='{'bad' if bad else ''}'>relative {100 * errors['test']:.1f} %</span> "
+                 f"(goal {100 * errors['goal']:.0f} %, {html.escape(errors['role'])}).")
+    text += "</p>" + _table(["", *names], rows)
+    text += SE_NOTE.format(dof=fit.get("standard_error_dof", "?")) if shown else ""
     sentence = determination_sentence(fit)
     text += f'<p class="determined">{html.escape(sentence)}</p>' if sentence else ""
-    figs = [_img(plots.fit_figure(prepared, curve, title=fit["item"], reference=reference), f"fit {fit['item']}")]
+    text += correlation_table(fit)
+    title = physical_name(fit["item"], cfg)
+    figs = [_img(plots.fit_figure(prepared, curve, title=title, reference=reference), f"fit {fit['item']}")]
     if fit.get("flow_stress"):
-        figs.append(_img(plots.flow_stress_figure(fit["flow_stress"], title=f"{fit['item']}: flow stress"),
+        figs.append(_img(plots.flow_stress_figure(fit["flow_stress"], title=f"{title}: flow stress"),
                          f"flow stress {fit['item']}"))
     if ((fit_dir / "shapes.csv").exists() and prepared is not None
             and any("markers" in s for s in prepared.samples.values())):
         shapes = pd.read_csv(fit_dir / "shapes.csv")
         shapes = shapes[shapes["displacement_mm"] > 0]
         vertical = "z" if fit.get("load_case") == "outofplane" else "y"   # the markers' axis
-        figs.append(_img(plots.shape_figure(prepared, shapes, title=f"{fit['item']}: bent shapes",
+        figs.append(_img(plots.shape_figure(prepared, shapes, title=f"{title}: bent shapes",
                                             vertical=vertical),
                          f"shapes {fit['item']}"))
-    trace = _load_trace(fit_dir / "trace.h5")
-    if trace is not None and len(trace):
-        figs.append(_img(plots.trace_figure(trace, title=f"{fit['item']}: Nelder-Mead"),
-                         f"trace {fit['item']}"))
+    fig, note = _trace_or_count(_load_trace(fit_dir / "trace.h5"), f"{title}: Nelder-Mead", f"trace {fit['item']}")
+    figs += [fig] if fig else []
+    text += note
+    if report_dir is not None:
+        text += links.folder_links(fit_dir, report_dir)
     return f'<div>{text}<div class="fit">{"".join(figs)}</div></div>'
 
 
+def _status_badges(statuses) -> str:
+    return "".join(f"<span class='status {verdict.STATUS_CLASS[st]}'>{html.escape(st)}</span>"
+                   for st in statuses)
+
+
+def _fitted_cell(row: "verdict.Row | None", value) -> Raw:
+    """A fitted value, flagged when the verdict puts it on a bound."""
+    text = html.escape(f"{value:.4g}" if isinstance(value, float) else str(value))
+    if row is not None and verdict.ON_BOUND in row.statuses:
+        text += " " + _status_badges([verdict.ON_BOUND])
+    return Raw(text)
+
+
 def stage_section(stage: str, fits: list[Path], results: Path, cfg: dict, truth: dict,
-                  measured: dict) -> str:
+                  measured: dict, *, rows: list | None = None, report_dir: Path | None = None) -> str:
     """A stage's fits; ``measured``: three-point tests by case (:func:`_measured_by_case`),
-    the band shown beside a hi-fi reference."""
+    the band shown beside a hi-fi reference; ``rows``: the verdict's rows (bound flags)."""
     heading, _, table_name = STAGES[stage]
-    blocks, summary = [], []
+    flags = {(r.item, r.parameter): r for r in (rows or []) if r.stage == stage}
+    blocks, summary, rom_rows = [], [], []
     for path in sorted(fits):
         fit = read_fit(path)
         prepared, reference = _reference_of(fit, results, measured)
         paper = paper_values(cfg, stage, fit["item"])
         tr = truth.get(prepared.test_id if prepared is not None else fit["test_id"], {}).get("parameters")
-        blocks.append(fit_block(fit, path.parent, prepared, paper, tr, reference))
+        errors = verdict.rom_errors(fit, path.parent, Path(results), measured, cfg) if stage == "rom" else None
+        blocks.append(fit_block(fit, path.parent, prepared, paper, tr, reference, cfg=cfg,
+                                report_dir=report_dir, errors=errors))
+        if stage == "branch":
+            summary.append([physical_name(fit["test_id"], cfg), fit["item"], fit.get("role", "calibration"),
+                            fit["parameters"].get("alpha", ""), f"{100 * fit['error_rel']:.2f} %",
+                            (paper or {}).get("alpha", "")])
+            continue
+        if errors:
+            rom_rows.append(_rom_rows(fit, errors, paper, tr, flags, cfg))
+            continue
         cells = _standard_error_cells(fit, list(fit["parameters"]))
+        fitted_to = [errors["fitted_to"]] if errors else []
         for (k, v), cell in zip(fit["parameters"].items(), cells):
-            summary.append([fit["item"], k, v, cell, tr.get(k, "") if tr else "",
-                            paper.get(k, "") if paper else ""])
-    table = _table(["item", "parameter", "recovered", "standard error", "truth", f"paper ({table_name})"],
-                   summary)
-    return f"<h2>{html.escape(heading)}</h2>{table}{''.join(blocks)}"
+            summary.append([physical_name(fit["item"], cfg), k, _fitted_cell(flags.get((fit["item"], k)), v),
+                            *fitted_to, cell, tr.get(k, "") if tr else "", paper.get(k, "") if paper else ""])
+    if stage == "branch":
+        table = (_table(["test", "run", "role", "alpha [s]", "relative error vs test", "paper (Sec. 5)"], summary)
+                 + _branch_overlay(fits, results, cfg))
+    elif stage == "rom":
+        table = ROM_NOTE + _rom_table(rom_rows)
+    else:
+        table = _table(["item", "parameter", "fitted", "standard error (replicates)", "truth (synthetic)",
+                        f"paper ({table_name})"], summary)
+    return f"<h2 id='{stage}'>{html.escape(heading)}</h2>{table}{''.join(blocks)}"
+
+
+ROM_NOTE = ("<p class='note'>Each ROM is fitted to the curve in its first row (config "
+            "<code>rom.reference</code>); its relative l2 error is given against that curve and "
+            "against the measured mean of the case's test, beside the goal of the case's role "
+            "(<code>hifi.pipeline.fidelity_goal</code>). A ROM fitted to one deterministic hi-fi "
+            "curve has no standard error (no noise to propagate).</p>")
+ROM_SYMBOLS = ("E", "sigma_y", "K", "n")
+
+
+def _rom_rows(fit: dict, errors: dict, paper: dict | None, truth: dict | None, flags: dict, cfg: dict) -> str:
+    """The rows of one case in the ROM table: fitted (bound flags, errors against its
+    reference and the test), the paper's and the test's truth."""
+    test = errors["test"]
+    if test is None:
+        verdict_cell = "no test"
+    else:
+        bad = test > errors["goal"]
+        verdict_cell = (f"{100 * test:.1f} % ({100 * errors['goal']:.0f} %, {html.escape(errors['role'])})"
+                        + (" " + _status_badges([verdict.MISMATCH]) if bad else ""))
+    lines = [(f"fitted to the {html.escape(errors['fitted_to'])}",
+              [str(_fitted_cell(flags.get((fit["item"], k)), fit["parameters"][k])) for k in ROM_SYMBOLS],
+              [f"{100 * errors['reference']:.1f} %", verdict_cell])]
+    if paper:
+        lines.append(("paper (Table 3)", [f"{paper[k]:g}" if k in paper else "" for k in ROM_SYMBOLS], ["", ""]))
+    if truth:
+        lines.append(("truth of the test (synthetic)", [f"{truth[k]:.4g}" if k in truth else "" for k in ROM_SYMBOLS], ["", ""]))
+    name = (f"<td class='txt' rowspan='{len(lines)}'>{html.escape(physical_name(fit['item'], cfg))}<br>"
+            f"<code class='note'>{html.escape(fit['item'])}</code></td>")
+    return "".join(f"<tr>{name if k == 0 else ''}<td class='txt'>{label}</td>"
+                   + "".join(f"<td>{c}</td>" for c in values + errs) + "</tr>"
+                   for k, (label, values, errs) in enumerate(lines))
+
+
+def _rom_table(rows: list[str]) -> str:
+    """The ROM table: per case its fitted, paper's and true properties and its errors."""
+    head = "".join(f"<th>{h}</th>" for h in ("case", "", "E [MPa]", "sigma_Y [MPa]", "K [MPa]", "n [-]",
+                                             "rel. error vs its reference", "vs the test (goal)"))
+    return f"<div class='wide'><table class='verdict'><tr>{head}</tr>{''.join(rows)}</table></div>"
+
+
+BRANCH_ZOOM_MM = 5.0   # the second panel of the alpha overlay: where damping shows (eq. 15)
+
+
+def _branch_overlay(fits: list[Path], results: Path, cfg: dict) -> str:
+    """The in-plane test with the elastic joint (alpha = 0) and the calibrated alpha overlaid."""
+    runs = {read_fit(p).get("role"): (read_fit(p), p.parent) for p in fits}
+    inplane = [(f, d) for f, d in runs.values() if f.get("load_case") == "inplane"]
+    if len(inplane) < 2:
+        return ""
+    test_id = inplane[0][0]["test_id"]
+    prepared = read_prepared(Path(results) / "data" / f"{test_id}.h5")
+    curves = {f"{'calibrated' if f.get('role') == 'calibration' else 'elastic joint'}: alpha = "
+              f"{f['parameters']['alpha']:.3g} s": pd.read_csv(d / "curve.csv")
+              for f, d in sorted(inplane, key=lambda fd: fd[0]["parameters"]["alpha"])}
+    fig = plots.overlay_figure(curves, prepared, title=f"{physical_name(test_id, cfg)}: damping of the joint",
+                               zoom=BRANCH_ZOOM_MM)
+    return '<div class="fit">' + _img(fig, "branch alpha overlay") + "</div>"
 
 
 def _reference_of(fit: dict, results: Path, measured: dict):
@@ -251,8 +422,6 @@ def _reference_of(fit: dict, results: Path, measured: dict):
 # --------------------------------------------------------------------------- hi-fi section
 
 HIFI_INTERFACE = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1")
-HIFI_RUN_NUMBERS = ("wall_s", "steps", "dt", "ke_ie_max", "energy_error", "n_beam_elements",
-                    "n_shell_elements", "contact_pairs_max")
 
 
 def _read_json(path: Path) -> dict | None:
@@ -280,25 +449,72 @@ def _measured_by_case(prepared: list[Path]) -> dict:
     return out
 
 
-def _hifi_run_block(title: str, folder: Path, measured) -> tuple[str, dict | None]:
+def solver_table(summary: dict, cfg: dict) -> list[list]:
+    """Rows (quantity with unit and limits, value, check) of a hi-fi run's summary numbers;
+    a value above its limit (``explicit``) is flagged."""
+    rows = []
+    for key, (label, limit) in solver_statistics(cfg).items():
+        if key not in summary or summary[key] is None:
+            continue
+        v = summary[key]
+        check = ""
+        if limit is not None:
+            check = (Raw(f"<span class='bad'>above {float(limit):g}</span>") if float(v) > float(limit)
+                     else f"within {float(limit):g}")
+        rows.append([label, f"{v:.3g}" if isinstance(v, float) else v, check])
+    return rows
+
+
+def _negative_energy_note(history: pd.DataFrame, summary: dict) -> str:
+    """A note for energy families that end below zero (the energy a family absorbs is minus
+    the work its forces do on the nodes, integrated over the run, not a stored potential)."""
+    labels = dict(plots.ENERGY_COLUMNS)
+    low = {k: float(history[k].min()) for k in ("contact", "pin_contact", "friction", "cohesive")
+           if k in history and float(history[k].min()) < 0.0}
+    w_ext = float(history["W_ext"].iloc[-1]) if "W_ext" in history else float("nan")
+    low = {k: v for k, v in low.items() if abs(v) > 1e-3 * abs(w_ext)}
+    if not low:
+        return ""
+    listed = ", ".join(f"{labels.get(k, k)} {v:.3g} N mm" for k, v in low.items())
+    balance = summary.get("energy_error")
+    closes = f" to {balance:.2g} of the external work" if balance is not None else ""
+    return (f"<p class='note'>Below zero ({listed}; external work {w_ext:.3g} N mm): each energy curve is "
+            "the work absorbed by that family of forces, integrated over the run; it goes negative when "
+            "those forces return more work to the nodes than they took. The balance KE + absorbed "
+            f"energies = external work closes{closes}.</p>")
+
+
+def _hifi_run_block(title: str, folder: Path, measured, cfg: dict | None = None,
+                    report_dir: Path | None = None) -> tuple[str, dict | None]:
     """Curve vs measured band, energies and the summary numbers of one hi-fi run."""
     summary = _read_json(folder / "summary.json")
     if summary is None or not (folder / "curve.csv").exists():
         return "", None
     curve = pd.read_csv(folder / "curve.csv")
     figs = [_img(plots.hifi_curve_figure({"hi-fi": curve}, measured, title=title), f"hi-fi {title}")]
+    energy_note = ""
     if (folder / "energies.csv").exists():
-        figs.append(_img(plots.energies_figure(pd.read_csv(folder / "energies.csv"),
-                                               title=f"{title}: energies"), f"energies {title}"))
+        history = pd.read_csv(folder / "energies.csv")
+        figs.append(_img(plots.energies_figure(history, title=f"{title}: energies"), f"energies {title}"))
+        energy_note = _negative_energy_note(history, summary)
     if (folder / "shapes.png").exists():
         data = base64.b64encode((folder / "shapes.png").read_bytes()).decode()
         figs.append(f'<img alt="shapes {html.escape(title)}" src="data:image/png;base64,{data}">')
-    numbers = [[k, summary[k]] for k in HIFI_RUN_NUMBERS if k in summary]
+    numbers = solver_table(summary, cfg or {})
     m = summary.get("measured")
     if m:
-        numbers.append([f"||e||_l2 vs {m['test_id']} [N]", m["error_l2"]])
-        numbers.append(["relative error", f"{100 * m['error_rel']:.2f} %"])
-    text = (f"<h4>{html.escape(title)}</h4>" + _table(["quantity", "value"], numbers))
+        numbers.append([f"||e||_l2 vs test {m['test_id']} [N]", m["error_l2"], ""])
+        goals = (cfg or {}).get("hifi", {}).get("pipeline", {}).get("fidelity_goal", {})
+        role = str(summary.get("role", "prediction")).split()[0]     # "calibration (mu_rtb)": a fit's run
+        goal = goals.get(role, goals.get("prediction"))
+        check = ""
+        if goal is not None:
+            check = (Raw(f"<span class='bad'>above the goal {100 * goal:.0f} %</span>") if m["error_rel"] > goal
+                     else f"within the goal {100 * goal:.0f} %")
+        numbers.append(["relative l2 error vs test", f"{100 * m['error_rel']:.1f} %", check])
+    text = f"<h4>{html.escape(title)}</h4>" + _table(["quantity", "value", "check"], numbers) + energy_note
+    if report_dir is not None:
+        text += links.folder_links(folder, report_dir, links.RUN_FILES)
     return f'<div>{text}<div class="fit">{"".join(figs)}</div></div>', summary
 
 
@@ -339,23 +555,23 @@ class _HifiCost:
         self.rows.append([label, n, per_run, wall_s / 60.0])
 
 
-def _crosscheck_table(root: Path, paper: dict) -> str:
+def _crosscheck_table(root: Path, cfg: dict) -> str:
     """Table 3 by eq. 13 + simplex on the cross-check curves beside the paper's."""
     t3 = root / "crosscheck" / "table3.csv"
     if not t3.exists():
         return ""
     rows = []
     for r in pd.read_csv(t3).itertuples():
-        ref = paper.get("table3", {}).get(r.case, {})
+        ref = cfg.get("paper", {}).get("table3", {}).get(r.case, {})
         for k in ("E", "sigma_y", "K", "n"):
-            rows.append([r.case, k, getattr(r, k), ref.get(k, ""), _rel(getattr(r, k), ref.get(k))])
+            rows.append([physical_name(r.case, cfg), k, getattr(r, k), ref.get(k, ""), _rel(getattr(r, k), ref.get(k))])
     return ("<h3>Table 3 from hi-fi curves at the paper's parameters</h3>"
             "<p>eq. 13 + simplex (the ROM stage's fit) on each hi-fi curve "
             "(<code>results/hifi/crosscheck/table3.csv</code>).</p>"
             + _table(["case", "parameter", "hi-fi + ROM fit", "paper (Table 3)", "difference"], rows))
 
 
-def _crosscheck_rom_figures(root: Path) -> str:
+def _crosscheck_rom_figures(root: Path, cfg: dict) -> str:
     """The ROM fitted to each cross-check curve, over that curve."""
     figs = []
     for fit_path in sorted(root.glob("crosscheck/*/rom/fit.json")):
@@ -363,7 +579,7 @@ def _crosscheck_rom_figures(root: Path) -> str:
         hifi_curve = fit_path.parent.parent / "curve.csv"
         if hifi_curve.exists():
             figs.append(_img(plots.hifi_rom_figure(pd.read_csv(hifi_curve), pd.read_csv(fit_path.parent / "curve.csv"),
-                                                   title=f"{fit['item']}: ROM on the hi-fi curve"),
+                                                   title=f"{physical_name(fit['item'], cfg)}: ROM on the hi-fi curve"),
                              f"rom crosscheck {fit['item']}"))
     return '<div class="fit">' + "".join(figs) + "</div>" if figs else ""
 
@@ -391,38 +607,52 @@ def _interface_table(root: Path, fits: list[Path], cfg: dict) -> str:
             + _table(["parameter", "calibrated", "initial guess", "paper (Sec. 4.2)", "difference"], rows))
 
 
-def _step_text(fit: dict, paper: dict) -> str:
+@dataclass
+class _HifiContext:
+    """What the hi-fi section's parts share: the config, the measured tests by case, the
+    report's folder (links) and the cost table they fill."""
+    cfg: dict
+    measured: dict
+    report_dir: Path | None = None
+    cost: _HifiCost = field(default_factory=_HifiCost)
+
+
+def _step_text(fit: dict, paper: dict, cfg: dict) -> str:
     """Heading, method, window, error, cost and fitted values of one calibration step."""
     status = "" if fit.get("converged") else ' <span class="bad">(search did not converge)</span>'
     if "not identifiable" in fit.get("message", ""):
         status = f' <span class="bad">{html.escape(fit["message"])}.</span>'
+    cases = "; ".join(labelled(c, cfg) for c in fit.get("cases", []))
     text = (f"<h3>Calibration step {html.escape(fit['item'])}</h3><p>{html.escape(fit.get('method', ''))} "
-            f"on {html.escape(', '.join(fit.get('cases', [])))}, deflection window "
+            f"on {html.escape(cases)}, deflection window "
             f"{fit.get('window')} mm: ||e||<sub>l2</sub> = {fit['error_l2']:.4g} N (relative "
-            f"{100 * fit['error_rel']:.2f} %), {fit['nfev']} evaluations, {fit.get('rejected', 0)} rejected, "
+            f"{100 * fit['error_rel']:.2f} %), {fit['nfev']} evaluation{'s' if fit['nfev'] != 1 else ''}, "
+            f"{fit.get('rejected', 0)} rejected, "
             f"{fit.get('hifi_wall_s', 0.0) / 60:.1f} min of hi-fi runs.{status}</p>"
             + _table(["", *fit["parameters"]], [["fitted", *fit["parameters"].values()],
-                                                 ["paper", *[paper.get("interface", {}).get(k, "")
+                                                 ["search interval", *[str(fit["bounds"]) if fit.get("bounds") else ""
+                                                                       for _ in fit["parameters"]]],
+                                                 ["paper", *[paper.get("interface", {}).get(k, "not in the paper")
                                                              for k in fit["parameters"]]]]))
     if fit["item"] == "cohesive":
         text += COHESIVE_MESH_NOTE
     return text
 
 
-def _step_figures(folder: Path, fit: dict, measured: dict) -> list[str]:
-    """The step's curves against the measured cases and its optimiser trace."""
+def _step_figures(folder: Path, fit: dict, ctx: _HifiContext) -> tuple[list[str], str]:
+    """The step's curves against the measured cases and its optimiser trace (or, for one or
+    two evaluations, a note instead)."""
     figs = []
     curve = pd.read_csv(folder / "curve.csv")
-    preps = {c: measured[c] for c in fit.get("cases", []) if c in measured}
+    preps = {c: ctx.measured[c] for c in fit.get("cases", []) if c in ctx.measured}
     if preps:
         figs.append(_img(plots.hifi_cases_figure(preps, {c: g for c, g in curve.groupby("case")},
-                                                 title=f"step {fit['item']}", window=fit.get("window")),
+                                                 title=f"step {fit['item']}", window=fit.get("window"),
+                                                 names={c: physical_name(c, ctx.cfg) for c in preps}),
                          f"chain {fit['item']}"))
-    trace = _load_trace(folder / "trace.h5")
-    if trace is not None and len(trace):
-        figs.append(_img(plots.trace_figure(trace, title=f"{fit['item']}: optimiser trace"),
-                         f"trace {fit['item']}"))
-    return figs
+    fig, note = _trace_or_count(_load_trace(folder / "trace.h5"), f"{fit['item']}: optimiser trace",
+                                f"trace {fit['item']}")
+    return figs + ([fig] if fig else []), note
 
 
 def _step_rejections(folder: Path, fit: dict) -> str:
@@ -437,47 +667,59 @@ def _step_rejections(folder: Path, fit: dict) -> str:
     return _table(["case", "parameters", "reason"], rejected) if rejected else ""
 
 
-def _calibration_step(path: Path, paper: dict, measured: dict, cost: _HifiCost) -> str:
-    """One step of the chain (its fit.json at ``path``); its runs go to ``cost``."""
+def _calibration_step(path: Path, paper: dict, ctx: _HifiContext) -> str:
+    """One step of the chain (its fit.json at ``path``); its runs go to the cost table."""
     fit = read_fit(path)
-    text = _step_text(fit, paper)
-    figs = _step_figures(path.parent, fit, measured)
+    text = _step_text(fit, paper, ctx.cfg)
+    figs, note = _step_figures(path.parent, fit, ctx)
     rej = _step_rejections(path.parent, fit)
     n = int(fit.get("hifi_runs", fit["nfev"]))
     wall = float(fit.get("hifi_wall_s", 0.0))
-    cost.add(f"fit {fit['item']}", n, wall, wall / max(n, 1))
-    return f'<div>{text}{rej}<div class="fit">{"".join(figs)}</div></div>'
+    ctx.cost.add(f"fit {fit['item']}", n, wall, wall / max(n, 1))
+    files = links.folder_links(path.parent, ctx.report_dir) if ctx.report_dir is not None else ""
+    return f'<div>{text}{note}{rej}{files}<div class="fit">{"".join(figs)}</div></div>'
 
 
-def _single_run(path: Path, root: Path, measured: dict, cost: _HifiCost) -> tuple[str, str]:
+def _single_run(path: Path, root: Path, ctx: _HifiContext) -> tuple[str, str]:
     """(group, block) of one single run (its summary.json at ``path``; block "" if it has
-    no curve); cross-check and virtual runs go to ``cost`` (a reused run at no cost)."""
+    no curve); cross-check and virtual runs go to the cost table (a reused run at no cost)."""
     folder = path.parent
     group = folder.parent.name if folder.parent.parent == root else "chain"
     case = folder.name
-    title = {"crosscheck": f"cross-check {case} (paper's values)", "virtual": f"virtual test {case}",
-             "chain": f"fit {folder.parent.name}: {case} at the best point"}[group]
-    block, summary = _hifi_run_block(title, folder, measured.get(case))
+    name = labelled(case, ctx.cfg)
+    title = {"crosscheck": f"cross-check: {name} at the paper's values", "virtual": f"virtual test: {name}",
+             "chain": f"fit {folder.parent.name}: {name} at the best point"}[group]
+    block, summary = _hifi_run_block(title, folder, ctx.measured.get(case), ctx.cfg, ctx.report_dir)
     if not block:
         return group, ""
     if summary.get("role"):
         block = block.replace("</h4>", f" <span class='note'>({html.escape(summary['role'])})</span></h4>", 1)
     if group != "chain" and summary.get("reused_from"):      # the fit's run, counted there
-        cost.rows.append([f"{title} (the fit's best-point run)", 0, 0.0, 0.0])
+        ctx.cost.rows.append([f"{title} (the fit's best-point run)", 0, 0.0, 0.0])
     elif group != "chain":
         wall = float(summary.get("wall_s", 0.0))
-        cost.add(title, 1, wall, wall)
+        ctx.cost.add(title, 1, wall, wall)
     return group, block
 
 
-def _single_runs(root: Path, runs: list[Path], measured: dict, cost: _HifiCost) -> str:
-    """The single runs by group: virtual tests, cross-check runs, best points of the fits."""
+def _single_runs(root: Path, runs: list[Path], ctx: _HifiContext) -> str:
+    """The single runs by group: virtual tests, then folded away (<details>) the cross-check
+    runs and the best points of the fits (repeats of runs shown in their fit)."""
     blocks = {group: [] for group, _ in RUN_GROUPS}
     for path in runs:
-        group, block = _single_run(path, root, measured, cost)
+        group, block = _single_run(path, root, ctx)
         if block:
             blocks[group].append(block)
-    return "".join(f"<h3>{head}</h3>" + "".join(blocks[group]) for group, head in RUN_GROUPS if blocks[group])
+    out = []
+    for group, head in RUN_GROUPS:
+        if not blocks[group]:
+            continue
+        if group == "virtual":
+            out.append(f"<h3>{head}</h3>" + "".join(blocks[group]))
+        else:
+            out.append(f"<h3>{head}</h3><details><summary>{len(blocks[group])} runs: curves, energies, "
+                       f"shapes and solver statistics</summary>" + "".join(blocks[group]) + "</details>")
+    return "".join(out)
 
 
 def _cost_table(cost: _HifiCost, paper_cost: dict) -> str:
@@ -492,9 +734,10 @@ def _cost_table(cost: _HifiCost, paper_cost: dict) -> str:
             + _table(["item", "hi-fi runs", "wall per run [s]", "wall total [min]"], rows))
 
 
-def _fidelity_table(root: Path, cfg: dict) -> str:
+def _fidelity_table(root: Path, cfg: dict, measured: dict | None = None) -> str:
     """Each virtual test's relative l2 error against its measured mean beside the goal of its
-    role (config ``hifi.pipeline.fidelity_goal``): met, or missed and by how much."""
+    role (config ``hifi.pipeline.fidelity_goal``): met, or missed and by how much; with the
+    measured tests (``measured``), the share of the measured force the model reaches."""
     goals = cfg["hifi"]["pipeline"]["fidelity_goal"]
     rows = []
     for path in sorted((root / "virtual").glob("*/summary.json")):
@@ -502,26 +745,32 @@ def _fidelity_table(root: Path, cfg: dict) -> str:
         m = (summary or {}).get("measured")
         if not m:
             continue
+        case = path.parent.name
         role = str(summary.get("role", "prediction"))
         goal = goals.get(role, goals["prediction"])
         err = float(m["error_rel"])
-        verdict = ("<td>met</td>" if err <= goal else
-                   f"<td class='bad'>missed by {100 * (err - goal):.1f} points</td>")
-        rows.append(f"<tr><td>{html.escape(path.parent.name)}</td><td>{html.escape(role)}</td>"
-                    f"<td>{100 * err:.1f} %</td><td>{100 * goal:.0f} %</td>{verdict}</tr>")
+        judged = ("<td>met</td>" if err <= goal else
+                  f"<td class='bad'>missed by {100 * (err - goal):.1f} points</td>")
+        ratio = ""
+        if measured and case in measured and (path.parent / "curve.csv").exists():
+            ratio = f"{100 * verdict.force_ratio(pd.read_csv(path.parent / 'curve.csv'), measured[case]):.0f} %"
+        rows.append(f"<tr><td>{html.escape(labelled(case, cfg))}</td><td>{html.escape(role)}</td>"
+                    f"<td>{100 * err:.1f} %</td><td>{100 * goal:.0f} %</td>{judged}<td>{ratio}</td></tr>")
     if not rows:
         return ""
-    head = "".join(f"<th>{h}</th>" for h in ("case", "role", "relative error", "goal", "verdict"))
+    head = "".join(f"<th>{h}</th>" for h in ("case", "role", "relative error", "goal", "verdict",
+                                             "model force / measured"))
     return ("<h3>Virtual tests against the bending tests</h3><p class='note'>Relative l2 error of "
             "each virtual test's force against the measured mean over its window; the goal is "
-            "the project's (calibration cases fitted on, the others predicted with no refit).</p>"
-            f"<table><tr>{head}</tr>{''.join(rows)}</table>")
+            "the project's (calibration cases fitted on, the others predicted with no refit); the "
+            "last column sums the model's force over the measured grid against the test's.</p>"
+            f"<div class='wide'><table><tr>{head}</tr>{''.join(rows)}</table></div>")
 
 
-def hifi_section(results: Path, cfg: dict, measured: dict) -> str:
+def hifi_section(results: Path, cfg: dict, measured: dict, report_dir: Path | None = None) -> str:
     """Everything of results/hifi that exists: cross-check Table 3, the calibration chain,
     the interface beside the paper's, the virtual tests, their energies and the cost."""
-    heading = f"<h2>{html.escape(STAGES['hifi'][0])}</h2>"
+    heading = f"<h2 id='hifi'>{html.escape(STAGES['hifi'][0])}</h2>"
     root = Path(results) / "hifi"
     runs = sorted(root.glob("*/*/summary.json")) + sorted(root.glob("chain/*/*/summary.json"))
     fits = sorted(root.glob("chain/*/fit.json"),
@@ -529,12 +778,12 @@ def hifi_section(results: Path, cfg: dict, measured: dict) -> str:
     if not runs and not fits and not (root / "crosscheck" / "table3.csv").exists():
         return heading + NO_HIFI_NOTE
     paper = cfg.get("paper", {})
-    cost = _HifiCost()
-    parts = [heading, HIFI_INTRO, _fidelity_table(root, cfg), _crosscheck_table(root, paper),
-             _crosscheck_rom_figures(root),
+    ctx = _HifiContext(cfg, measured, report_dir)
+    parts = [heading, HIFI_INTRO, _fidelity_table(root, cfg, measured), _crosscheck_table(root, cfg),
+             _crosscheck_rom_figures(root, cfg),
              _interface_table(root, fits, cfg)]
-    parts += [_calibration_step(p, paper, measured, cost) for p in fits]
-    parts += [_single_runs(root, runs, measured, cost), _cost_table(cost, paper.get("cost", {}))]
+    parts += [_calibration_step(p, paper, ctx) for p in fits]
+    parts += [_single_runs(root, runs, ctx), _cost_table(ctx.cost, paper.get("cost", {}))]
     return "".join(parts)
 
 
@@ -581,21 +830,16 @@ def branch_hifi_section(results: Path, cfg: dict) -> str:
     for u in BRANCH_HIFI_AT:
         row = [u] + ([float(np.interp(u, prepared.grid, prepared.mean))] if prepared is not None else [])
         rows += [row + [float(np.interp(u, c["displacement_mm"], c["force_N"])) for c in curves.values()]]
-    cost = [["hi-fi run (wall, s)", f"{summary['wall_s']:.0f}"], ["explicit steps", summary["steps"]],
-            ["dt [s]", f"{summary['dt']:.3g}"], ["simulated time [s]", summary["t_total"]],
-            ["beam / shell elements", f"{summary['n_beam_elements']} / {summary['n_shell_elements']}"],
-            ["max KE/IE (after a third of the stroke)", f"{summary['ke_ie_max']:.3g}"],
-            ["energy balance error", f"{summary['energy_error']:.2g}"],
-            ["plastic work [N mm]", f"{summary['plastic_work']:.3g}"]]
+    cost = solver_table(summary, cfg)
     for name, (fit, _) in roms.items():
-        cost.append([f"ROM {name} run (wall, s)", f"{fit['wall_s']:.2f}"])
+        cost.append([f"ROM {name} run: wall time [s]", f"{fit['wall_s']:.2f}", ""])
     text = ("<h3>Hi-fi Y harness beside the ROM (Fig. 18a)</h3><p class='note'>The mesoscale model "
             "(every wire a fibre beam, open tubes and tape as shells, contact-friction, cohesive tape; "
             "<code>models/hifi_branch.py</code>) at the paper's interface values and the tensile "
             "stage's coverings, against the ROM with the same geometry. The paper finds hi-fi and "
             "elastic-joint ROM alike and both below the test for u &lt; 10 mm.</p>"
             + _table(header, [[f"{v:.4g}" if isinstance(v, float) else v for v in r] for r in rows])
-            + _table(["cost and checks", "value"], cost))
+            + _table(["cost and checks", "value", "check"], cost))
     return f'<div>{text}<div class="fit">{"".join(figs)}</div></div>'
 
 
@@ -607,27 +851,211 @@ def _read_json_line(line: str) -> dict | None:
         return None
 
 
+BRANCH_RUNS = {"inplane": "Y harness, in-plane pull: alpha calibrated",
+               "elastic": "Y harness, in-plane pull: elastic joint (alpha = 0)",
+               "outofplane": "Y harness, out-of-plane pull: validation at the calibrated alpha",
+               "hifi": "Y harness, in-plane pull: hi-fi model"}
+
+
+def folder_name(rel: str, cfg: dict) -> str:
+    """What a result folder (path below results/) holds, in words."""
+    parts = rel.split("/")
+    if parts[0] == "branch":
+        return BRANCH_RUNS.get(parts[-1], parts[-1])
+    if parts[:2] == ["hifi", "chain"]:
+        return f"hi-fi calibration step {parts[-1]}"
+    prefix = {"virtual": "hi-fi virtual test: ", "crosscheck": "hi-fi at the paper's values: "}.get(
+        parts[1] if len(parts) > 2 else "", "")
+    return prefix + physical_name(parts[-1], cfg)
+
+
+SECTION_ORDER = ("tensile", "hifi", "rom", "branch")   # the chain's order (DESIGN sec. 2)
+STATUS_MEANING = {
+    verdict.MISMATCH: "relative l2 error against the measured mean above the goal of its role "
+                      "(hifi.pipeline.fidelity_goal)",
+    verdict.ON_BOUND: f"within {100 * verdict.BOUND_TOL:.0f} % of an end of its search interval",
+    verdict.NOT_IDENTIFIABLE: f"standard error above {100 * verdict.UNDETERMINED:.0f} %, or stopped by the "
+                              "fit's identifiability screen",
+    verdict.NO_SE: "the fit gives no standard error",
+    verdict.ROUGH: f"standard error {100 * verdict.DETERMINED:.0f}-{100 * verdict.UNDETERMINED:.0f} %",
+    verdict.OK: f"standard error below {100 * verdict.DETERMINED:.0f} %",
+}
+
+
+def _se_cell(se) -> str:
+    if se is None:
+        return "none"
+    return "> 100 %" if se > 1.0 else f"\u00b1{100.0 * se:.2g} %"
+
+
+def _counts(rows) -> str:
+    return ", ".join(f"{_status_badges([st])}&nbsp;{n}" for st in verdict.STATUS_ORDER
+                     if (n := sum(st in r.statuses for r in rows)))
+
+
+def verdict_section(rows: list, cfg: dict) -> str:
+    """The verdict's summary: what was calibrated, per stage how well against the tests and
+    how many parameters carry which status."""
+    if not rows:
+        return "<h2 id='verdict'>Verdict</h2><p>No calibrated parameter in these results yet.</p>"
+    body = []
+    for stage in SECTION_ORDER:
+        sr = [r for r in rows if r.stage == stage]
+        if not sr:
+            continue
+        items = sorted({r.item for r in sr})
+        errs = [r.error for r in sr if r.error is not None]
+        goals = sorted({r.goal for r in sr if r.goal is not None})
+        err = "" if not errs else (f"{100 * min(errs):.1f}-{100 * max(errs):.1f} %" if max(errs) > min(errs)
+                                   else f"{100 * errs[0]:.1f} %")
+        bad = bool(errs) and any(r.error > r.goal for r in sr if r.error is not None and r.goal is not None)
+        body.append(f"<tr><td><a href='#{stage}'>{html.escape(verdict.STAGE_NAMES[stage])}</a></td>"
+                    f"<td>{len(sr)} in {len(items)} item{'s' if len(items) > 1 else ''}</td>"
+                    f"<td class='{'bad' if bad else ''}'>{err}</td>"
+                    f"<td style='white-space:nowrap'>{' / '.join(f'{100 * g:.0f} %' for g in goals)}</td>"
+                    f"<td style='text-align:left'>{_counts(sr)}</td></tr>")
+    head = "".join(f"<th>{h}</th>" for h in ("stage", "calibrated parameters", "fit error vs the tests",
+                                             "goal", "status of the parameters"))
+    return (f"<h2 id='verdict'>Verdict</h2><p><b>{len(rows)} calibrated parameters</b> "
+            f"(profile {html.escape(cfg.get('profile', ''))}): {_counts(rows)}. "
+            "<a href='#parameters'>Every parameter</a> below the limitations.</p>"
+            f"<div class='wide'><table><tr>{head}</tr>{''.join(body)}</table></div>")
+
+
+def parameters_section(rows: list, cfg: dict, truth: dict) -> str:
+    """The verdict per parameter: value, the paper's, their difference, standard errors, the
+    fit's error against the test (its goal) and the statuses, grouped by stage and item."""
+    if not rows:
+        return ""
+    header = ["stage", "item", "parameter", "value", "paper", "difference", "SE (Fisher)", "SE (replicates)"]
+    header += ["truth (synthetic)"] if truth else []
+    header += ["fit error vs test (goal)", "status"]
+    body, groups = [], {}
+    for r in rows:
+        groups.setdefault((r.stage, r.item), []).append(r)
+    for (stage, item), group in groups.items():
+        for k, r in enumerate(group):
+            cells = ""
+            if k == 0:
+                span = f" rowspan='{len(group)}'"
+                cells += (f"<td class='txt'{span}>{html.escape(verdict.STAGE_NAMES[stage])}</td>"
+                          f"<td class='txt'{span}>{html.escape(physical_name(item, cfg))}<br>"
+                          f"<code class='note'>{html.escape(item)}</code></td>")
+            fisher = r.se if r.se_source == "Fisher" else None
+            cells += f"<td class='txt'>{html.escape(SYMBOLS.get(r.parameter, r.parameter))}</td>"
+            values = [f"{r.value:.4g}",
+                      "" if r.paper is None else f"{r.paper:g}",
+                      "" if r.difference is None else f"{100 * r.difference:+.1f} %",
+                      _se_cell(fisher), _se_cell(r.se_replicates)]
+            values += ["" if r.truth is None else f"{r.truth:g}"] if truth else []
+            values += ["" if r.error is None else f"{100 * r.error:.1f} % ({100 * r.goal:.0f} %)"]
+            cells += "".join(f"<td>{html.escape(v)}</td>" for v in values)
+            badges = _status_badges(r.statuses)
+            if r.bound:   # the interval right after its badge
+                badge = _status_badges([verdict.ON_BOUND])
+                badges = badges.replace(badge, f"{badge} <span class='note'>[{r.bound[0]:g}, {r.bound[1]:g}]</span>")
+            cells += f"<td class='txt'>{badges}</td>"
+            body.append(f"<tr>{cells}</tr>")
+    legend = ("<p class='note'>" + "; ".join(f"{_status_badges([st])} {html.escape(m)}"
+                                             for st, m in STATUS_MEANING.items())
+              + ". Standard errors are relative (of ln p): Fisher's from the load-cell noise (the tested "
+              "specimens), the replicates' sandwich on 2 degrees of freedom (the population); the status "
+              "uses Fisher's where there is one. The fit error is the relative l2 error of the model "
+              "against the measured mean of the test (for a hi-fi step: the worst of its cases' virtual "
+              "tests; for a ROM: its curve against the case's test).</p>")
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    return (f"<h2 id='parameters'>Verdict per parameter</h2>{legend}"
+            f"<div class='wide'><table class='verdict'><tr>{head}</tr>{''.join(body)}</table></div>")
+
+
+def limitations_section(sentences: list[str]) -> str:
+    items = "".join(f"<li>{html.escape(t)}</li>" for t in sentences)
+    text = f"<ul>{items}</ul>" if sentences else "<p>None of the report's checks found a limitation.</p>"
+    return f"<div class='limits'><h2 id='limitations'>Limitations</h2>{text}</div>"
+
+
+def _slug(text: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", html.unescape(re.sub(r"<[^>]+>", "", text)).lower()).strip("-")
+
+
+def with_toc(body: str, first: str = "verdict") -> tuple[str, str]:
+    """Give every <h3> of ``body`` an id and return (body, table of contents) of its <h2 id>
+    sections and their <h3> subsections (those outside <details>)."""
+    used: set[str] = set()
+
+    def unique(base: str) -> str:
+        k, name = 1, base or "section"
+        while name in used:
+            k += 1
+            name = f"{base}-{k}"
+        used.add(name)
+        return name
+    used.update(re.findall(r"<h2 id='([^']+)'", body))
+    body = re.sub(r"<h3>(.*?)</h3>", lambda m: f"<h3 id='{unique(_slug(m.group(1)))}'>{m.group(1)}</h3>", body)
+    toc, depth = [], 0
+    for m in re.finditer(r"<h([23]) id='([^']+)'>(.*?)</h\1>|<details>|</details>", body):
+        if m.group(0) == "<details>":
+            depth += 1
+            continue
+        if m.group(0) == "</details>":
+            depth -= 1
+            continue
+        if depth == 0:
+            toc.append((int(m.group(1)), m.group(2), re.sub(r"<[^>]+>", "", m.group(3))))
+    out, open_sub = [], False
+    for level, anchor, title in toc:
+        if level == 2:
+            if open_sub:
+                out.append("</ul></li>")
+                open_sub = False
+            elif out:
+                out.append("</li>")
+            out.append(f"<li><a href='#{anchor}'>{title}</a>")
+        else:
+            if not open_sub:
+                out.append("<ul>")
+                open_sub = True
+            out.append(f"<li><a href='#{anchor}'>{title}</a></li>")
+    out.append("</ul></li>" if open_sub else "</li>")
+    return body, "<nav class='toc' id='contents'><b>Contents</b><ul>" + "".join(out) + "</ul></nav>"
+
+
 def build(out: Path, *, cfg: dict, results: Path, check_summary: Path,
           prepared: list[Path], fits: dict[str, list[Path]]) -> Path:
     """Write the report to ``out`` (atomically) and return its path."""
-    results = Path(results)
+    results, out = Path(results), Path(out)
+    report_dir = out.parent
     truth = read_truth(Path(cfg["data_dir"]))
-    parts = [f"<h1>harnesspipe report</h1><p class='note'>harnesspipe {__version__}, "
-             f"profile <b>{html.escape(cfg['profile'])}</b>. Units mm, N, MPa.</p>",
-             data_section(Path(check_summary).read_text().strip(), prepared, truth)]
     measured = _measured_by_case(prepared)
-    for stage in STAGES:
+    rows = verdict.verdict_rows(cfg, results, fits, truth, measured)
+    sections = [verdict_section(rows, cfg),
+                limitations_section(verdict.limitations(rows, cfg, results, fits, truth, measured)),
+                parameters_section(rows, cfg, truth),
+                data_section(Path(check_summary).read_text().strip(), prepared, truth, cfg)]
+    for stage in SECTION_ORDER:
         if stage == "hifi":
-            parts.append(hifi_section(results, cfg, measured))
+            sections.append(hifi_section(results, cfg, measured, report_dir))
         elif fits.get(stage):
-            parts.append(stage_section(stage, fits[stage], results, cfg, truth, measured))
+            sections.append(stage_section(stage, fits[stage], results, cfg, truth, measured, rows=rows,
+                                          report_dir=report_dir))
             if stage == "branch":
-                parts.append(branch_hifi_section(results, cfg))
+                sections.append(branch_hifi_section(results, cfg))
+    files = links.files_section(results, report_dir, lambda rel: folder_name(rel, cfg))
+    if files:
+        sections.append("<h2 id='files'>Result files</h2>" + files)
+    body, toc = with_toc("".join(sections[3:]))
+    top = "".join(sections[:3])
+    jump = " \u00b7 ".join(f"<a href='#{a}'>{html.escape(t)}</a>" for a, t in
+                           re.findall(r"<h2 id='([^']+)'>(.*?)</h2>", top + body))
+    head = (f"<h1>harnesspipe report</h1><p class='note'>harnesspipe {__version__}, "
+            f"profile <b>{html.escape(cfg['profile'])}</b>. Units mm, N, MPa, s. "
+            f"<a href='#contents'>Contents</a>: {jump}</p>")
+    body = top + toc + body
     page = ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
+            "<meta name='viewport' content='width=device-width, initial-scale=1'>"
             "<title>harnesspipe report</title><style>" + CSS + "</style></head><body>"
-            + "".join(parts) + "</body></html>\n")
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
+            + head + body + "</body></html>\n")
+    report_dir.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(out.name + ".tmp")
     tmp.write_text(page)
     tmp.replace(out)

@@ -23,7 +23,8 @@ def _finish(fig, ax, xlabel: str, ylabel: str, title: str, legend_size: int, leg
 
 def fit_figure(prepared, curve=None, title="", xlabel="displacement [mm]", label="simulated", reference=None):
     """Band (min/max of the replicates), their mean and a simulated curve (with its 95 % band
-    when ``curve`` has a ``band_N`` column, the half-width); ``reference``
+    when ``curve`` has a ``band_N`` column, the half-width, and the replicates' band when it
+    has ``band_replicate_N``); ``reference``
     (displacement_mm, force_N): the hi-fi curve a ROM was fitted to, when not the mean;
     ``prepared`` None: no measured test to show."""
     fig, ax = plt.subplots(figsize=(5.2, 3.6), dpi=110)
@@ -42,6 +43,10 @@ def fit_figure(prepared, curve=None, title="", xlabel="displacement [mm]", label
             x, F, b = (np.asarray(curve[k], dtype=float) for k in ("displacement_mm", "force_N", "band_N"))
             ax.fill_between(x, F - b, F + b, color="tab:red", alpha=0.3, lw=0,
                             label=f"model 95 % band (parameters, \u00b1{np.nanmax(b):.2g} N at most)")
+        if "band_replicate_N" in curve and np.any(np.isfinite(curve["band_replicate_N"])):
+            x, F, b = (np.asarray(curve[k], dtype=float) for k in ("displacement_mm", "force_N", "band_replicate_N"))
+            ax.fill_between(x, F - b, F + b, color="tab:purple", alpha=0.18, lw=0,
+                            label=f"model 95 % band (replicates, \u00b1{np.nanmax(b):.2g} N at most)")
     return _finish(fig, ax, xlabel, "force [N]", title, legend_size=8)
 
 
@@ -106,7 +111,7 @@ def shape_figure(prepared, shapes, title="", vertical="y"):
             ax.plot(m[:, 3], m[:, 4], "o", ms=3.5, mfc="none", color=c)
     ax.plot([], [], "o", mfc="none", color="0.3", label="markers (3 samples)")
     ax.set_aspect("equal")
-    return _finish(fig, ax, "x [mm]", f"{vertical} [mm]", title, legend_size=7, legend_at="lower right")
+    return _finish(fig, ax, "x [mm]", f"{vertical} [mm]", title, legend_size=8, legend_at="lower right")
 
 
 # --------------------------------------------------------------------------- hi-fi section
@@ -128,14 +133,43 @@ def hifi_curve_figure(curves: dict, prepared=None, title="", window=None, xlabel
         ax.plot(x, c["force_N"], lw=1.6, ls=styles[k % len(styles)], label=label)
     if window is not None:
         ax.axvspan(window[0], window[1], color="tab:orange", alpha=0.08, label="fitted window")
-    return _finish(fig, ax, xlabel, "force [N]", title, legend_size=7)
+    return _finish(fig, ax, xlabel, "force [N]", title, legend_size=8)
 
 
-def hifi_cases_figure(prepared: dict, curves: dict, title="", window=None):
-    """One panel per case of a calibration step: band, mean and the hi-fi curve at the best point."""
+def overlay_figure(curves: dict, prepared=None, title="", xlabel="crosshead displacement [mm]", zoom=None):
+    """Model curves (label -> DataFrame displacement_mm, force_N) over the measured band, in two
+    stacked panels: the whole test and its first ``zoom`` mm, where curves that differ only in
+    the transient (the joint's damping, eq. 15) come apart."""
+    fig, axes = plt.subplots(2, 1, figsize=(5.6, 6.4), dpi=110)
+    styles = ["--", "-.", ":", "-"]
+    for ax, limit in zip(axes, (None, zoom)):
+        if prepared is not None:
+            _band(ax, prepared)
+        for k, (label, c) in enumerate(curves.items()):
+            ax.plot(c["displacement_mm"], c["force_N"], lw=1.6, ls=styles[k % len(styles)], label=label)
+        if limit is not None:
+            x = np.asarray(prepared.grid if prepared is not None else c["displacement_mm"], dtype=float)
+            ys = [np.asarray(c["force_N"])[np.asarray(c["displacement_mm"]) <= limit] for c in curves.values()]
+            if prepared is not None:
+                ys.append(np.asarray(prepared.hi)[x <= limit])
+            ax.set_xlim(0.0, limit)
+            ax.set_ylim(min(0.0, *(float(np.min(y)) for y in ys if y.size)),
+                        1.05 * max(float(np.max(y)) for y in ys if y.size))
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("force [N]")
+        ax.set_title(title if limit is None else f"first {limit:g} mm", fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper left")
+    fig.tight_layout()
+    return fig
+
+
+def hifi_cases_figure(prepared: dict, curves: dict, title="", window=None, names=None):
+    """One panel per case of a calibration step, stacked (each as wide as a one-panel figure):
+    band, mean and the hi-fi curve at the best point; ``names``: case -> title."""
     n = max(len(prepared), 1)
-    fig, axes = plt.subplots(1, n, figsize=(5.0 * n, 3.6), dpi=110, squeeze=False)
-    for ax, (case, pr) in zip(axes[0], prepared.items()):
+    fig, axes = plt.subplots(n, 1, figsize=(5.6, 3.4 * n), dpi=110, squeeze=False)
+    for ax, (case, pr) in zip(axes[:, 0], prepared.items()):
         _band(ax, pr)
         c = curves.get(case)
         if c is not None:
@@ -145,9 +179,9 @@ def hifi_cases_figure(prepared: dict, curves: dict, title="", window=None):
             ax.axvspan(window[0], window[1], color="tab:orange", alpha=0.08, label="fitted window")
         ax.set_xlabel("deflection [mm]")
         ax.set_ylabel("force [N]")
-        ax.set_title(f"{title}: {case}", fontsize=9)
+        ax.set_title(f"{title}: {(names or {}).get(case, case)}", fontsize=9)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="best")
+        ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
     return fig
 
@@ -182,4 +216,4 @@ def energies_figure(history, title=""):
                     ls="--" if col == "W_ext" else "-", label=label)
     xlabel = {"deflection_mm": "deflection [mm]", "displacement_mm": "crosshead displacement [mm]",
               "time_s": "time [s]"}[xcol]
-    return _finish(fig, ax, xlabel, "energy [N mm]", title, legend_size=7, legend_at="upper left")
+    return _finish(fig, ax, xlabel, "energy [N mm]", title, legend_size=8, legend_at="upper left")

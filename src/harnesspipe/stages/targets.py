@@ -108,16 +108,22 @@ def report_fit_args(fits: dict[str, list[str]]) -> list[str]:
     return [f"{stage}={path}" for stage, paths in fits.items() for path in paths]
 
 
+def summary_tables(config: dict, tests: dict, res: str) -> list[str]:
+    """The summary tables of the stages that run (DESIGN sec. 5)."""
+    tables = [(bool(tensile_components(tests)), f"{res}/tensile/table2.csv"),
+              (bool(rom_cases(config, tests)), f"{res}/rom/table3.csv"),
+              (has_branch(tests), f"{res}/branch/damping.csv")]
+    return [path for included, path in tables if included]
+
+
 def report_extra(config: dict, tests: dict, res: str) -> list[str]:
-    """Further results the report shows: the hi-fi Y harness when it is in ``all``."""
-    return branch_hifi_targets(config, tests, res)
+    """Further results the report shows or links: the summary tables and the hi-fi Y harness
+    when it is in ``all``."""
+    return summary_tables(config, tests, res) + branch_hifi_targets(config, tests, res)
 
 
 def final_targets(config: dict, tests: dict, res: str) -> list[str]:
     """The inputs of rule ``all``: every stage's summary table, the hi-fi Y harness and the
     hi-fi groups when this profile includes them, and the report."""
-    tables = [(bool(tensile_components(tests)), f"{res}/tensile/table2.csv"),
-              (bool(rom_cases(config, tests)), f"{res}/rom/table3.csv"),
-              (has_branch(tests), f"{res}/branch/damping.csv")]
-    return ([path for included, path in tables if included] + branch_hifi_targets(config, tests, res)
+    return (summary_tables(config, tests, res) + branch_hifi_targets(config, tests, res)
             + hifi_targets(config, res) + [f"{res}/report/index.html"])

@@ -1,0 +1,394 @@
+"""The report's verdict: per stage and calibrated parameter, its value beside the paper's,
+its standard error, the fit's error against the test and a status, and the limitations
+that follow from those numbers.
+
+Every status and every limitation is a condition on the result files (fit.json, the hi-fi
+summaries, the curves) and the config; nothing here is prose about a particular run.
+
+Statuses (a parameter can carry several; "determined" only when no other holds):
+
+* *model does not match the test* -- the relative l2 error of the model against the
+  measured mean exceeds the goal of its role (config ``hifi.pipeline.fidelity_goal``);
+* *on a bound* -- the value lies within :data:`BOUND_TOL` of the width of its search
+  interval (at least the search's tolerance) of an end of it; for a half-open interval
+  (0, inf), within :data:`BOUND_TOL` of the paper's value of zero;
+* *not identifiable* -- its relative standard error (of ln p) exceeds :data:`UNDETERMINED`
+  or the fit's identifiability screen stopped it (fit.json ``message``);
+* *no standard error* -- the fit gives none (a deterministic hi-fi search, a ROM fitted to
+  one hi-fi curve): how well the data fix it is not known;
+* *determined* (SE below :data:`DETERMINED`) or *roughly determined* (up to UNDETERMINED).
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from harnesspipe.calibrate.hardening import N_MAX
+from harnesspipe.calibrate.objective import relative_l2_error
+from harnesspipe.report.names import physical_name
+from harnesspipe.stages.chain_settings import STEPS as CHAIN_STEPS
+from harnesspipe.stages.common import read_fit
+
+DETERMINED, UNDETERMINED = 0.05, 0.3   # relative standard error: "determined" below, "not" above
+BOUND_TOL = 0.01                       # "on a bound": within 1 % of the search interval
+
+MISMATCH = "model does not match the test"
+ON_BOUND = "on a bound"
+NOT_IDENTIFIABLE = "not identifiable"
+NO_SE = "no standard error"
+ROUGH = "roughly determined"
+OK = "determined"
+STATUS_ORDER = (MISMATCH, ON_BOUND, NOT_IDENTIFIABLE, NO_SE, ROUGH, OK)
+STATUS_CLASS = {MISMATCH: "st-mismatch", ON_BOUND: "st-bound", NOT_IDENTIFIABLE: "st-unident",
+                NO_SE: "st-nose", ROUGH: "st-rough", OK: "st-ok"}
+STAGE_NAMES = {"tensile": "component tensile (Table 2)", "hifi": "hi-fi interface (Sec. 4.2)",
+               "rom": "ROM beam (Table 3)", "branch": "branch damping (Sec. 5)"}
+SYMBOLS = {"sigma_y": "sigma_Y"}     # parameter names as the paper writes them
+HARDENING_BOUNDS = {"sigma_y": (0.0, math.inf), "K": (0.0, math.inf), "n": (0.0, N_MAX)}
+
+
+@dataclass
+class Row:
+    """One calibrated parameter of the verdict."""
+    stage: str
+    item: str
+    parameter: str
+    value: float
+    paper: float | None = None
+    truth: float | None = None
+    se: float | None = None           # relative standard error (of ln p)
+    se_source: str = ""               # "Fisher" | "replicates"
+    se_replicates: float | None = None  # the replicate sandwich's, shown beside Fisher's
+    error: float | None = None        # relative l2 error of the model against the measured mean
+    error_of: str = ""                # what the error is against
+    goal: float | None = None         # the goal of that error
+    bound: tuple | None = None        # (lo, hi) the value sits on, when it does
+    statuses: list = field(default_factory=list)
+
+    @property
+    def difference(self) -> float | None:
+        """Relative difference to the paper's value (None without one)."""
+        if self.paper in (None, 0) or not isinstance(self.paper, (int, float)):
+            return None
+        return (self.value - self.paper) / self.paper
+
+
+def bound_hit(value: float, bounds, atol: float):
+    """The end of the search interval ``bounds`` = (lo, hi) that ``value`` lies within
+    ``atol`` of (None: neither)."""
+    lo, hi = bounds
+    for b in (lo, hi):
+        if math.isfinite(b) and abs(value - b) <= atol:
+            return b
+    return None
+
+
+def statuses(*, se, on_bound, error, goal, screened: bool = False) -> list[str]:
+    """The statuses of a parameter (see module docstring), most severe first."""
+    out = []
+    if error is not None and goal is not None and error > goal:
+        out.append(MISMATCH)
+    if on_bound:
+        out.append(ON_BOUND)
+    if screened or (se is not None and se > UNDETERMINED):
+        out.append(NOT_IDENTIFIABLE)
+    elif se is None:
+        out.append(NO_SE)
+    if not out:
+        out.append(OK if se < DETERMINED else ROUGH)
+    return out
+
+
+def _standard_error(fit: dict, name: str) -> tuple[float | None, str]:
+    """(relative SE, source) of a parameter: Fisher's where it has one, else the replicate
+    sandwich's, else (None, "")."""
+    fisher = fit.get("fisher") or {}
+    se = (fisher.get("standard_error") or {}).get(name)
+    if se is not None and math.isfinite(se):
+        return float(se), "Fisher"
+    se = (fit.get("standard_error") or {}).get(name)
+    if se is not None and math.isfinite(se):
+        return float(se), "replicates"
+    return None, ""
+
+
+def _goal(cfg: dict, role: str) -> float:
+    goals = cfg["hifi"]["pipeline"]["fidelity_goal"]
+    return float(goals.get(role, goals["prediction"]))
+
+
+def curve_error(curve: pd.DataFrame, prepared) -> float:
+    """Relative l2 error of a model curve (displacement_mm or deflection_mm, force_N)
+    against the measured mean, on the measured grid points the curve covers."""
+    x = curve["deflection_mm"] if "deflection_mm" in curve else curve["displacement_mm"]
+    x, F = np.asarray(x, dtype=float), np.asarray(curve["force_N"], dtype=float)
+    order = np.argsort(x, kind="stable")
+    x, F = x[order], F[order]
+    mask = (prepared.grid >= x[0]) & (prepared.grid <= x[-1] + 1e-9)
+    return relative_l2_error(prepared.mean[mask], np.interp(prepared.grid[mask], x, F))
+
+
+def force_ratio(curve: pd.DataFrame, prepared) -> float:
+    """Model force over measured force, summed over the measured grid the curve covers
+    (how much of the test's force the model reaches)."""
+    x = curve["deflection_mm"] if "deflection_mm" in curve else curve["displacement_mm"]
+    x, F = np.asarray(x, dtype=float), np.asarray(curve["force_N"], dtype=float)
+    order = np.argsort(x, kind="stable")
+    mask = (prepared.grid >= x[order][0]) & (prepared.grid <= x[order][-1] + 1e-9)
+    return float(np.interp(prepared.grid[mask], x[order], F[order]).sum() / prepared.mean[mask].sum())
+
+
+def _row(stage, item, name, value, fit, cfg, *, paper, truth, error, error_of, goal, bounds, atol,
+         screened=False) -> Row:
+    se, source = _standard_error(fit, name) if fit is not None else (None, "")
+    rep = (fit or {}).get("standard_error") or {}
+    se_rep = rep.get(name) if rep.get(name) is not None and math.isfinite(rep[name]) else None
+    hit = bound_hit(value, bounds, atol) if bounds is not None and atol is not None else None
+    return Row(stage, item, name, float(value), paper=paper, truth=truth, se=se, se_source=source,
+               se_replicates=se_rep,
+               error=error, error_of=error_of, goal=goal,
+               bound=bounds if hit is not None else None,
+               statuses=statuses(se=se, on_bound=hit is not None, error=error, goal=goal,
+                                 screened=screened))
+
+
+def _hardening_atol(name: str, paper: dict | None):
+    """Tolerance of the hardening law's admissible set: the width for n in (0, N_MAX];
+    BOUND_TOL of the paper's value for (0, inf) (None without a paper value)."""
+    lo, hi = HARDENING_BOUNDS[name]
+    if math.isfinite(hi):
+        return BOUND_TOL * (hi - lo)
+    value = (paper or {}).get(name)
+    return BOUND_TOL * abs(float(value)) if value else None
+
+
+def tensile_rows(paths, cfg: dict, truth: dict) -> list[Row]:
+    rows = []
+    for path in sorted(paths):
+        fit = read_fit(path)
+        paper = cfg["paper"].get("table2", {}).get(fit["item"])
+        tr = truth.get(fit["test_id"], {}).get("parameters", {})
+        for name, value in fit["parameters"].items():
+            bounds = HARDENING_BOUNDS.get(name)
+            rows.append(_row("tensile", fit["item"], name, value, fit, cfg,
+                             paper=(paper or {}).get(name), truth=tr.get(name),
+                             error=float(fit["error_rel"]), error_of=f"test {fit['test_id']}",
+                             goal=_goal(cfg, "calibration"), bounds=bounds,
+                             atol=_hardening_atol(name, paper) if bounds else None))
+    return rows
+
+
+def rom_errors(fit: dict, fit_dir: Path, results: Path, measured: dict, cfg: dict) -> dict:
+    """A ROM fit's relative l2 errors: ``reference`` (the curve it was fitted to: fit.json),
+    ``test`` (its curve against the case's measured mean; None without a test) and the
+    ``goal`` of the case's role (its virtual test's role; prediction without one)."""
+    case = fit["item"]
+    summary = results / "hifi" / "virtual" / case / "summary.json"
+    role = "prediction"
+    if summary.exists():
+        role = str(json.loads(summary.read_text()).get("role", role))
+    test = None
+    if case in measured:
+        test = curve_error(pd.read_csv(fit_dir / "curve.csv"), measured[case])
+    return {"reference": float(fit["error_rel"]), "test": test, "goal": _goal(cfg, role), "role": role,
+            "fitted_to": "hi-fi virtual test" if fit["test_id"].startswith("hifi:") else f"test {fit['test_id']}"}
+
+
+def rom_rows(paths, cfg: dict, truth: dict, results: Path, measured: dict) -> list[Row]:
+    rows = []
+    for path in sorted(paths):
+        fit = read_fit(path)
+        paper = cfg["paper"].get("table3", {}).get(fit["item"])
+        err = rom_errors(fit, path.parent, results, measured, cfg)
+        test_id = measured[fit["item"]].test_id if fit["item"] in measured else fit["test_id"]
+        tr = truth.get(test_id, {}).get("parameters", {})
+        for name, value in fit["parameters"].items():
+            bounds = HARDENING_BOUNDS.get(name)
+            rows.append(_row("rom", fit["item"], name, value, fit, cfg, paper=(paper or {}).get(name),
+                             truth=tr.get(name), error=err["test"], error_of=f"test {test_id}",
+                             goal=err["goal"], bounds=bounds,
+                             atol=_hardening_atol(name, paper) if bounds else None))
+    return rows
+
+
+def _virtual_error(results: Path, case: str) -> float | None:
+    path = results / "hifi" / "virtual" / case / "summary.json"
+    if not path.exists():
+        return None
+    m = json.loads(path.read_text()).get("measured")
+    return float(m["error_rel"]) if m else None
+
+
+def hifi_rows(results: Path, cfg: dict) -> list[Row]:
+    """The calibration chain's parameters (results/hifi/chain/*/fit.json), each with the
+    largest error of the final virtual tests of the cases its step fitted on (else of the
+    step's best point)."""
+    pipe = cfg["hifi"]["pipeline"]
+    paper = cfg["paper"].get("interface", {})
+    rows = []
+    order = list(CHAIN_STEPS)
+    steps = sorted((results / "hifi" / "chain").glob("*/fit.json"),
+                   key=lambda p: (order.index(p.parent.name) if p.parent.name in order else len(order), p.parent.name))
+    for path in steps:
+        fit = read_fit(path)
+        errors = []
+        for case in fit.get("cases", []):
+            e = _virtual_error(results, case)
+            if e is None:
+                e = ((fit.get("per_case") or {}).get(case, {}).get("measured") or {}).get("error_rel")
+            if e is not None:
+                errors.append((float(e), case))
+        error, worst = max(errors) if errors else (None, "")
+        screened = "not identifiable" in str(fit.get("message", ""))
+        bounds = tuple(fit["bounds"]) if fit.get("bounds") else None
+        atol = max(BOUND_TOL * (bounds[1] - bounds[0]), float(pipe["bounded_xatol"])) if bounds else None
+        for name, value in fit["parameters"].items():
+            rows.append(_row("hifi", fit["item"], name, value, None, cfg, paper=paper.get(name), truth=None,
+                             error=error, error_of=f"virtual test {worst}" if worst else "",
+                             goal=_goal(cfg, "calibration"), bounds=bounds, atol=atol, screened=screened))
+    return rows
+
+
+def branch_rows(paths, cfg: dict, truth: dict) -> list[Row]:
+    """The calibrated alpha (role calibration); the fixed alpha = 0 and the validation run are
+    not calibrations."""
+    br = cfg["branch"]
+    bounds = tuple(br["alpha_bounds"])
+    atol = max(BOUND_TOL * (bounds[1] - bounds[0]), float(br.get("alpha_xatol", 0.0)))
+    rows = []
+    for path in sorted(paths):
+        fit = read_fit(path)
+        if fit.get("role", "calibration") != "calibration":
+            continue
+        tr = truth.get(fit["test_id"], {}).get("parameters", {})
+        for name, value in fit["parameters"].items():
+            rows.append(_row("branch", "Y harness", name, value, fit, cfg,
+                             paper=cfg["paper"].get("damping", {}).get(name), truth=tr.get(name),
+                             error=float(fit["error_rel"]), error_of=f"test {fit['test_id']}",
+                             goal=_goal(cfg, "calibration"), bounds=bounds, atol=atol))
+    return rows
+
+
+def verdict_rows(cfg: dict, results: Path, fits: dict, truth: dict, measured: dict) -> list[Row]:
+    """Every calibrated parameter, in the order of the chain: tensile, hi-fi, ROM, branch."""
+    results = Path(results)
+    return (tensile_rows(fits.get("tensile", []), cfg, truth) + hifi_rows(results, cfg)
+            + rom_rows(fits.get("rom", []), cfg, truth, results, measured)
+            + branch_rows(fits.get("branch", []), cfg, truth))
+
+
+# --------------------------------------------------------------------------- limitations
+
+def _pct(x: float) -> str:
+    return f"{100.0 * x:.0f} %" if x >= 0.1 else f"{100.0 * x:.2g} %"
+
+
+def _span(values) -> str:
+    lo, hi = min(values), max(values)
+    return _pct(lo) if _pct(lo) == _pct(hi) else f"{_pct(lo)}-{_pct(hi)}"
+
+
+def _names(rows, cfg) -> str:
+    """'sigma_Y of <item>; mu_rtb (hi-fi interface); ...'."""
+    return "; ".join(f"{SYMBOLS.get(r.parameter, r.parameter)} (hi-fi interface)" if r.stage == "hifi"
+                     else f"{SYMBOLS.get(r.parameter, r.parameter)} of {physical_name(r.item, cfg)}"
+                     for r in rows)
+
+
+def _fit_name(row: Row, cfg: dict) -> str:
+    """'the hi-fi step mu_rtb', 'the component tensile (Table 2) fit of closed tube (...)'."""
+    if row.stage == "hifi":
+        return f"the hi-fi step {row.item}"
+    return f"the {STAGE_NAMES[row.stage]} fit of {physical_name(row.item, cfg)}"
+
+
+def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
+    """Each virtual test with a measured test: case, role, error, goal, force ratio."""
+    out = []
+    for path in sorted((Path(results) / "hifi" / "virtual").glob("*/summary.json")):
+        summary = json.loads(path.read_text())
+        case, m = path.parent.name, summary.get("measured")
+        if not m or case not in measured or not (path.parent / "curve.csv").exists():
+            continue
+        role = str(summary.get("role", "prediction"))
+        out.append({"case": case, "role": role, "error": float(m["error_rel"]), "goal": _goal(cfg, role),
+                    "ratio": force_ratio(pd.read_csv(path.parent / "curve.csv"), measured[case])})
+    return out
+
+
+def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: dict,
+                measured: dict) -> list[str]:
+    """Sentences on what not to trust, each produced by a condition on the results."""
+    out = []
+    profile = cfg.get("profile", "default")
+    if profile != "default":
+        budget = cfg["hifi"]["pipeline"]["budgets"].get(profile, {})
+        out.append(f"This run is of the {profile} profile (coarser meshes"
+                   + (f"; hi-fi searches stop after {budget['bounded_maxfev']} (bounded) or "
+                      f"{budget['simplex_maxfev']} (simplex) evaluations" if budget else "")
+                   + "), not the default profile's reproduction.")
+    fid = hifi_fidelity(results, cfg, measured)
+    missed = [f for f in fid if f["error"] > f["goal"]]
+    if missed:
+        ratios = [f["ratio"] for f in missed]
+        out.append(f"The hi-fi model does not match the bending tests: {len(missed)} of {len(fid)} virtual "
+                   f"tests miss their goal, with relative errors of {_span([f['error'] for f in missed])}; "
+                   f"their force is {_span(ratios)} of the measured force "
+                   f"({'; '.join(physical_name(f['case'], cfg) + ': ' + _pct(f['ratio']) for f in missed)}).")
+    covered = {"rom"} | ({"hifi"} if fid else set())      # said above / below by stage
+    other = {(r.stage, r.item): r for r in rows if MISMATCH in r.statuses and r.stage not in covered}
+    if other:
+        out.append("The model misses its test by more than the goal for "
+                   + "; ".join(f"{_fit_name(r, cfg)} ({_pct(r.error)} against {_pct(r.goal)})"
+                               for r in other.values())
+                   + ": its fitted values compensate for what the model lacks.")
+    rom = [r for r in rows if r.stage == "rom"]
+    rom_fits = [read_fit(p) for p in fits.get("rom", [])]
+    if rom and any(f["test_id"].startswith("hifi:") for f in rom_fits):
+        errs = sorted({(r.item, r.error) for r in rom if r.error is not None})
+        refs = [float(f["error_rel"]) for f in rom_fits]
+        if errs:
+            out.append(f"The ROM properties (Table 3) are fitted to the hi-fi virtual tests "
+                       f"(rom.reference: hifi), not to the tests: they reproduce the hi-fi curves to "
+                       f"{_span(refs)} but the measured means only to {_span([e for _, e in errs])}.")
+    bound = [r for r in rows if ON_BOUND in r.statuses]
+    if bound:
+        out.append(f"{len(bound)} parameter{'s sit' if len(bound) > 1 else ' sits'} on a bound of "
+                   f"{'their' if len(bound) > 1 else 'its'} search, so the value reflects the bound, not the "
+                   f"data: {_names(bound, cfg)}.")
+    unident = [r for r in rows if NOT_IDENTIFIABLE in r.statuses]
+    if unident:
+        out.append(f"The data do not determine {_names(unident, cfg)} (relative standard error above "
+                   f"{_pct(UNDETERMINED)}, or stopped by the fit's identifiability screen).")
+    nose = [r for r in rows if NO_SE in r.statuses]
+    if nose:
+        stages = list(dict.fromkeys(STAGE_NAMES[r.stage] for r in nose))
+        out.append(f"{len(nose)} parameter{'s carry' if len(nose) > 1 else ' carries'} no standard error "
+                   f"({', '.join(stages)}): how well the data fix {'them' if len(nose) > 1 else 'it'} is not known.")
+    for stage, paths in fits.items():
+        for p in paths:
+            fit = read_fit(p)
+            chi = fit.get("chi_square") or {}
+            if chi and chi.get("pass") is False:
+                out.append(f"The residual of the {physical_name(fit['item'], cfg)} fit is larger than the "
+                           f"load-cell noise (chi2/dof {chi['chi2_per_dof']:.3g}, p = {chi['p_value']:.2g}): "
+                           "model error beyond the noise; its Fisher standard errors understate the "
+                           "uncertainty.")
+            if not fit.get("converged", True) and fit.get("role", "calibration") == "calibration":
+                out.append(f"The optimiser of the {physical_name(fit['item'], cfg)} fit ({stage}) stopped "
+                           f"after {fit['nfev']} evaluations without converging.")
+    for p in sorted((Path(results) / "hifi" / "chain").glob("*/fit.json")):
+        fit = read_fit(p)
+        if not fit.get("converged", True) and "not identifiable" not in str(fit.get("message", "")):
+            out.append(f"The hi-fi search of step {fit['item']} stopped after {fit['nfev']} evaluations "
+                       "without converging.")
+    if truth:
+        out.append("The test data are the synthetic twin, generated from the paper's values "
+                   "(data/experimental/README.md): agreement with the paper's tables is agreement "
+                   "with the generator, not with a laboratory.")
+    return out
