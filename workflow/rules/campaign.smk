@@ -34,8 +34,6 @@ if CAMPAIGN is not None:
         wildcard_constraints:
             construction=CAMPAIGN_NAMES,
         threads: 1
-        resources:
-            runtime=120,
         shell:
             "NUMBA_NUM_THREADS={threads} {HP} campaign hifi --construction {wildcards.construction} "
             "--settings '{params.settings}' --outdir {CAMP}/{wildcards.construction}/hifi > {log} 2>&1"
