@@ -23,6 +23,7 @@ COMMAND_MODULES = (
     "harnesspipe.commands.report",
     "harnesspipe.commands.stage",
     "harnesspipe.commands.campaign",
+    "harnesspipe.commands.cards",
 )
 
 
@@ -44,9 +45,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _input_errors() -> tuple[type[BaseException], ...]:
+    from harnesspipe.cards.properties import TableError
     from harnesspipe.config import ConfigError
     from harnesspipe.data.experimental import DataError
-    return (ConfigError, DataError, InputError, FileNotFoundError)
+    return (ConfigError, DataError, InputError, TableError, FileNotFoundError)
 
 
 def main(argv: list[str] | None = None) -> int:
