@@ -17,7 +17,7 @@ from conftest import REPO
 from harnesspipe import config as hp_config
 from harnesspipe.campaign import catalogue as K
 from harnesspipe.campaign import settings as S
-from harnesspipe.campaign.stage import COLUMNS, bending_stiffness, library, properties, yield_curvature
+from harnesspipe.campaign.library import COLUMNS, bending_stiffness, library, properties, yield_curvature
 from harnesspipe.config import ConfigError
 from harnesspipe.models.hifi_mesh import PART_TAPE, build_mesh
 
@@ -152,8 +152,7 @@ def test_new_wire_type_tape_and_test_geometry_reach_the_model(cfg):
     settings = json.loads(S.hifi(cat, "mix", cfg, hp_config.resolution(cfg), S.interface(cfg, "nowhere"),
                                  S.coverings(cfg, "nowhere")))
     inp = inputs(settings["model"], "mix", {}, covering_values=settings["coverings"])
-    system = HifiSystem(__import__("harnesspipe.models.hifi_mesh", fromlist=["build_mesh"]).build_mesh(
-        inp.case, inp.config, inp.resolution), inp)
+    system = HifiSystem(build_mesh(inp.case, inp.config, inp.resolution), inp)
     mesh = system.mesh
     assert sorted(np.unique(mesh.wire_type)) == [2, 3] and np.sum(mesh.wire_type == 3) == 4
     np.testing.assert_allclose(mesh.wire_radius[mesh.wire_type == 3], 0.45)
@@ -218,8 +217,11 @@ def test_failed_run_gives_a_failed_row_without_numbers(cfg, demo, tmp_path):
     assert all(row[k] is None for k in ("E", "sigma_y", "K", "n", "EI", "kappa_y"))
     frame = library([tmp_path / "w7_t2_closed" / "property.json"], tmp_path / "properties.csv")
     assert list(frame.columns) == COLUMNS
-    back = (tmp_path / "properties.csv").read_text().splitlines()
-    assert back[1].startswith("w7_t2_closed,,,,,4.7,,,7,")      # no plausible-looking numbers
+    back = (tmp_path / "properties.csv").read_text().splitlines()[1].split(",")
+    assert back[:6] == ["w7_t2_closed", "", "", "", "", "4.7"]      # no plausible-looking numbers
+    assert back[7:9] == ["", ""]                                    # EI, kappa_y
+    # rho: the seven type-2 wires' mass over pi r_o^2
+    assert float(back[6]) == pytest.approx(7 * 4.34e-9 * 0.7**2 / 4.7**2)
 
 
 def test_section_properties():

@@ -1,5 +1,5 @@
 """The demo campaign end to end (quick profile) in a temporary copy of the project: the property
-library, the campaign page, the reruns (none for an unchanged catalogue, one construction for an
+library, the campaign page, the solver cards, the reruns (none for an unchanged catalogue, one construction for an
 added entry) and a construction whose run fails (recorded, the others untouched)."""
 from __future__ import annotations
 
@@ -58,6 +58,18 @@ def test_property_library(project):
         assert row["EI"] > loose, row
 
 
+def test_solver_cards_of_every_construction(project):
+    """The library carded in the three formats (harnesspipe cards): the eq. 2 law and the
+    section radius of each row in its CalculiX deck, one LS-DYNA file per construction."""
+    cards = project / "results" / "campaign" / "demo" / "cards"
+    for rec in _library(project).to_dict("records"):
+        for fmt in ("calculix", "abaqus"):
+            deck = (cards / fmt / rec["case"] / "material.inp").read_text()
+            assert "*PLASTIC" in deck and f"E {rec['E']:g} MPa" in deck
+            assert f"r_o {rec['r_o']:g} mm" in deck and f"rho {rec['rho']:.6g} t/mm^3" in deck
+        assert (cards / "lsdyna" / rec["case"] / "material.k").is_file()
+
+
 def test_campaign_page_is_offline_with_every_construction(project):
     html = (project / "results" / "campaign" / "demo" / "index.html").read_text()
     for name in _library(project)["case"]:
@@ -82,7 +94,7 @@ def test_added_unstable_entry_runs_alone_and_fails_cleanly(project):
     (project / DEMO).write_text(yaml.safe_dump(catalogue, sort_keys=False))
     planned = job_stats(snakemake(project, "--dry-run"))
     assert planned == {"campaign_hifi": 1, "campaign_rom": 1, "campaign_library": 1,
-                       "campaign_page": 1, "campaign": 1}
+                       "campaign_page": 1, "campaign_cards": 3, "campaign": 1}
     run = snakemake(project)
     assert run.returncode == 0, run.stderr[-4000:]
     after = _library(project)
@@ -94,6 +106,7 @@ def test_added_unstable_entry_runs_alone_and_fails_cleanly(project):
                                   / "property.json").read_text())["diagnostics"]
     assert diagnostics["reason"].startswith("max KE/IE") and diagnostics["step"] > 0
     assert "w7_too_fast" in (project / "results" / "campaign" / "demo" / "index.html").read_text()
+    assert not (project / "results" / "campaign" / "demo" / "cards" / "calculix" / "w7_too_fast").exists()
 
 
 def test_bad_entry_stops_snakemake_naming_it(project):

@@ -1,6 +1,7 @@
 # Virtual test campaigns (issue 28; DESIGN stage 10): a construction catalogue -> the hi-fi
 # virtual test of each construction at the calibrated interface -> eq. 13 + simplex -> one row
-# of results/campaign/<catalogue>/properties.csv, and the campaign page beside it.
+# of results/campaign/<catalogue>/properties.csv, the campaign page beside it and the solver
+# cards of the library (cards/calculix|abaqus|lsdyna/<construction>/, harnesspipe cards).
 #   snakemake --cores 2 campaign --config campaign=config/campaigns/demo.yaml [profile=quick]
 # The catalogue is checked when the workflow is parsed (a bad entry stops here, naming the
 # construction and the key).  Each construction's rules get settings built from its entry alone
@@ -10,7 +11,8 @@
 from harnesspipe.campaign import settings as CAMPAIGN_SETTINGS
 
 CAMPAIGN = CAMPAIGN_SETTINGS.catalogue(config)     # None without --config campaign=FILE
-CAMPAIGN_CODE = code_hash("harnesspipe.campaign.stage", "commands/campaign.py")
+CAMPAIGN_HIFI_CODE = code_hash("harnesspipe.campaign.virtual", "commands/campaign.py")
+CAMPAIGN_ROM_CODE = code_hash("harnesspipe.campaign.library", "commands/campaign.py")
 
 if CAMPAIGN is not None:
     CAMP = CAMPAIGN_SETTINGS.folder(CAMPAIGN, RES)
@@ -30,7 +32,7 @@ if CAMPAIGN is not None:
         params:
             settings=lambda wc: CAMPAIGN_SETTINGS.hifi(CAMPAIGN, wc.construction, config, PROFILE,
                                                        CAMPAIGN_INTERFACE, CAMPAIGN_COVERINGS),
-            code=CAMPAIGN_CODE,
+            code=CAMPAIGN_HIFI_CODE,
         wildcard_constraints:
             construction=CAMPAIGN_NAMES,
         threads: 1
@@ -50,7 +52,7 @@ if CAMPAIGN is not None:
             f"{RES}/logs/campaign_{CAMPAIGN.name}/{{construction}}_rom.log",
         params:
             settings=lambda wc: CAMPAIGN_SETTINGS.rom(CAMPAIGN, wc.construction, config, PROFILE),
-            code=CAMPAIGN_CODE,
+            code=CAMPAIGN_ROM_CODE,
         wildcard_constraints:
             construction=CAMPAIGN_NAMES,
         threads: 1
@@ -68,7 +70,7 @@ if CAMPAIGN is not None:
         log:
             f"{RES}/logs/campaign_{CAMPAIGN.name}/library.log",
         params:
-            code=CAMPAIGN_CODE,
+            code=CAMPAIGN_ROM_CODE,
         shell:
             "{HP} campaign library --rows {input} --out {output} > {log} 2>&1"
 
@@ -87,7 +89,24 @@ if CAMPAIGN is not None:
             "{HP} campaign page --library {input} --title '{params.title}' --out {output} > {log} 2>&1"
 
 
+    rule campaign_cards:
+        """Solver cards of every ok row of the library (harnesspipe cards): cards/<format>/<case>/."""
+        input:
+            f"{CAMP}/properties.csv",
+        output:
+            f"{CAMP}/cards/{{format}}/README.md",
+        log:
+            f"{RES}/logs/campaign_{CAMPAIGN.name}/cards_{{format}}.log",
+        params:
+            code=code_hash("harnesspipe.cards", "commands/cards.py"),
+        wildcard_constraints:
+            format="calculix|abaqus|lsdyna",
+        shell:
+            "{HP} cards --table {input} --format {wildcards.format} --out {CAMP}/cards/{wildcards.format} "
+            "> {log} 2>&1"
+
+
 rule campaign:
-    """Target: the property library and page of --config campaign=CATALOGUE."""
+    """Target: the property library, page and solver cards of --config campaign=CATALOGUE."""
     input:
         lambda wc: CAMPAIGN_SETTINGS.targets(CAMPAIGN, RES),

@@ -96,18 +96,21 @@ def rom(cat: Catalogue, name: str, config: dict, resolution: dict) -> str:
     cfg = {**config, "cases": {name: case}, "hifi": {**config["hifi"], "extra_cases": {}},
            "three_point": test_geometry(entry, config)}
     settings = json.loads(stage_settings.rom_on_hifi(cfg, resolution, name))
-    settings["features"] = features(entry, case)
+    settings["features"] = features(entry, case, {**config["materials"], **cat.wire_types})
     return json.dumps(settings, sort_keys=True)
 
 
-def features(entry: dict, case: dict) -> dict:
-    """What the library and the page show a construction by: wire counts, covering, taping."""
+def features(entry: dict, case: dict, materials: dict) -> dict:
+    """What the library and the page show a construction by: wire counts, covering, taping;
+    and the effective beam's r_o and density rho (the wires' mass smeared over pi r_o^2, as
+    the branch ROM's lumped mass: :func:`harnesspipe.cards.effective_density`)."""
+    from harnesspipe.cards import effective_density
     return {"n_wires": int(sum(entry["wires"].values())),
             "wires": " ".join(f"{k}:{v}" for k, v in sorted(entry["wires"].items())),
             "covering": entry["covering"]["type"], "taping": entry["taping"]["type"],
             "tape": entry["taping"]["tape"] if entry["taping"]["type"] != "none" else "",
             "span": entry["test"]["span"], "deflection": entry["test"]["deflection"],
-            "r_o": case["r_o"]}
+            "r_o": case["r_o"], "rho": effective_density(entry["wires"], materials, case["r_o"])}
 
 
 def folder(cat: Catalogue, results: str | Path) -> str:
@@ -116,6 +119,9 @@ def folder(cat: Catalogue, results: str | Path) -> str:
 
 
 def targets(cat: Catalogue | None, results: str | Path) -> list[str]:
-    """The outputs of target ``campaign``: the property library and the campaign page."""
+    """The outputs of target ``campaign``: the property library, the campaign page and the
+    solver cards in every format (their index, ``cards/<format>/README.md``)."""
+    from harnesspipe.cards import FORMATS
     root = folder(require(cat), results)
-    return [f"{root}/properties.csv", f"{root}/index.html"]
+    return [f"{root}/properties.csv", f"{root}/index.html",
+            *(f"{root}/cards/{fmt}/README.md" for fmt in FORMATS)]

@@ -56,20 +56,20 @@ def _check(args) -> int:
 
 
 def _hifi(args) -> int:
-    from harnesspipe.campaign.stage import virtual_test
+    from harnesspipe.campaign.virtual import virtual_test
     result = virtual_test(args.construction, args.settings, args.outdir)
     print(json.dumps(result, indent=2, default=str))
     return 0
 
 
 def _rom(args) -> int:
-    from harnesspipe.campaign.stage import properties
+    from harnesspipe.campaign.library import properties
     print(json.dumps(properties(args.construction, args.hifi, args.settings, args.outdir), indent=2))
     return 0
 
 
 def _library(args) -> int:
-    from harnesspipe.campaign.stage import library
+    from harnesspipe.campaign.library import library
     print(library(args.rows, args.out).to_string(index=False))
     return 0
 
