@@ -196,6 +196,9 @@ def test_settings_follow_their_own_entry_only(cfg, demo, tmp_path):
     assert other["build"] == {"wire_fill": 0.0, "end_tape_layers": 3.5}
     assert own["build"] == {"wire_fill": 0.5, "end_tape_layers": 3.5}
     assert other["parameters"]["mu_rtb"] == 0.25 and other["parameters"]["E2_over_E1"] == 1.0   # no fabric
+    sleeve = _check(_with(demo, "w7_fabric", wires={"wire_type2": 7}, covering="fabric"), cfg)
+    assert json.loads(S.hifi(sleeve, "w7_fabric", cfg, res, fitted, covs))["model"]["hifi"][
+        "parameters"]["E2_over_E1"] == 0.5
     with pytest.raises(ConfigError, match="campaign_interface"):
         S.interface({**cfg, "campaign_interface": str(tmp_path / "missing.csv")}, tmp_path)
 

@@ -73,9 +73,9 @@ def hifi(cat: Catalogue, name: str, config: dict, resolution: dict, itf: tuple[s
     label, values = itf
     model["hifi"]["build"].update({k: v for k, v in values.items() if k in BUILD_KEYS})
     model["hifi"]["build"].update(cat.constructions[name]["build"])
-    params = {**NEUTRAL, **{k: v for k, v in values.items() if k not in BUILD_KEYS}}
-    if case["covering"] != "fabric_tube":
-        params.update(NEUTRAL)
+    params = {k: v for k, v in values.items() if k not in BUILD_KEYS}
+    if case["covering"] != "fabric_tube" or "E2_over_E1" not in params:
+        params.update(NEUTRAL)          # a run without a fabric sleeve does not depend on E2/E1
     model["hifi"]["parameters"] = params
     cov_label, cov_values = covs
     cov = case["covering"]
