@@ -91,6 +91,21 @@ def feature_figure(ok: pd.DataFrame, column: str, ylabel: str):
     return _finish(fig, ax, "wires in the bundle", ylabel, f"{ylabel} by construction")
 
 
+def sources(root: Path, lib: pd.DataFrame) -> str:
+    """Where the virtual tests' interface and the coverings' eq. 2 properties came from (each
+    run's ``hifi/result.json``)."""
+    import json
+    found = {"interface_source": [], "coverings_source": []}
+    for case in lib["case"]:
+        path = root / case / "hifi" / "result.json"
+        run = json.loads(path.read_text()) if path.is_file() else {}
+        for key, seen in found.items():
+            if run.get(key) not in (None, "none", *seen):
+                seen.append(run[key])
+    return (f"<p>Interface of the virtual tests: {html.escape('; '.join(found['interface_source']))}. "
+            f"Coverings' eq. 2 properties: {html.escape('; '.join(found['coverings_source']) or '-')}.</p>")
+
+
 def build(library_csv: Path, out: Path, title: str = "") -> str:
     """Write the page for ``library_csv`` (the construction folders beside it) to ``out``."""
     library_csv, out = Path(library_csv), Path(out)
@@ -102,7 +117,7 @@ def build(library_csv: Path, out: Path, title: str = "") -> str:
              "virtual three-point test at the campaign's interface, then eq. 13 + simplex (Sec. 4.3). "
              "EI = E π r_o⁴/4; κ_Y = σ_Y/(E r_o), the curvature at which the effective beam's outer fibre "
              "yields.  Library: <code>properties.csv</code>.</p>",
-             "<h2>Property library</h2>", table(lib)]
+             sources(root, lib), "<h2>Property library</h2>", table(lib)]
     if len(ok):
         parts += ["<h2>Stiffness and yield curvature by construction</h2>",
                   _img(feature_figure(ok, "EI", "EI [N mm²]"), "EI by construction"),
