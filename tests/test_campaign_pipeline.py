@@ -76,6 +76,8 @@ def test_campaign_page_is_offline_with_every_construction(project):
         assert name in html
     assert html.count("data:image/png;base64,") == 2 + 3      # EI, kappa_y; one curve per construction
     assert "http://" not in html and "https://" not in html
+    # a fresh copy has no calibrated interface (results/hifi/interface.csv): the paper's values
+    assert "Interface of the virtual tests: paper (Sec. 4.2" in html
 
 
 def test_unchanged_catalogue_reruns_nothing(project):
