@@ -92,6 +92,10 @@ def test_bad_names_and_types_are_named(cfg, demo):
         _check({**demo, "wire_types": {"wire_type3": own}}, cfg)
     with pytest.raises(ConfigError, match=r"wire_types: wire_type1: already a wire type of config materials"):
         _check({**demo, "wire_types": {"wire_type1": {**own, "d_outer": 1.0}}}, cfg)
+    tape = {"E": 300.0, "sigma_y": 5.0, "K": 20.0, "n": 0.5, "nu": 0.3, "rho": 1.1e-9,
+            "thickness": 0.3, "width": 19.0}
+    with pytest.raises(ConfigError, match=r"tapes: polypropylene: already a material of config materials"):
+        _check({**demo, "tapes": {"polypropylene": tape}}, cfg)
     with pytest.raises(ConfigError, match=r"wire_types: wire_type3.n: 1.5"):
         _check({**demo, "wire_types": {"wire_type3": {**own, "d_outer": 1.0, "n": 1.5}}}, cfg)
 

@@ -198,6 +198,10 @@ def _check_types(data: dict, config: dict) -> list[str]:
         if name in config["materials"]:
             out.append(f"wire_types: {name}: already a wire type of config materials: "
                        "give the new type another number")
+    for name in data.get("tapes", {}):
+        if name in config["materials"]:
+            out.append(f"tapes: {name}: already a material of config materials: give the tape "
+                       "another name")
     for section in ("wire_types", "tapes"):
         for name, props in data.get(section, {}).items():
             out += [f"{section}: {name}.{k}: {v!r}: {msg}" for k, v in props.items()
