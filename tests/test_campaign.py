@@ -225,10 +225,10 @@ def test_failed_run_gives_a_failed_row_without_numbers(cfg, demo, tmp_path):
     frame = library([tmp_path / "w7_t2_closed" / "property.json"], tmp_path / "properties.csv")
     assert list(frame.columns) == COLUMNS
     back = (tmp_path / "properties.csv").read_text().splitlines()[1].split(",")
-    assert back[:6] == ["w7_t2_closed", "", "", "", "", "4.7"]      # no plausible-looking numbers
+    assert back[:6] == ["w7_t2_closed", "", "", "", "", "7.05"]     # no plausible-looking numbers
     assert back[7:9] == ["", ""]                                    # EI, kappa_y
     # rho: the seven type-2 wires' mass over pi r_o^2
-    assert float(back[6]) == pytest.approx(7 * 4.34e-9 * 0.7**2 / 4.7**2)
+    assert float(back[6]) == pytest.approx(7 * 4.34e-9 * 0.7**2 / 7.05**2)
 
 
 def test_section_properties():

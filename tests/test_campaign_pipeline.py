@@ -91,8 +91,7 @@ def test_added_unstable_entry_runs_alone_and_fails_cleanly(project):
     before = _library(project)
     catalogue = yaml.safe_load((project / DEMO).read_text())
     catalogue["constructions"]["w7_too_fast"] = {
-        "wires": {"wire_type2": 7}, "covering": {"type": "closed", "d_i": 6.0, "d_o": 9.4},
-        "loading_time_scale": 0.05}
+        "wires": {"wire_type2": 7}, "covering": "closed", "loading_time_scale": 0.05}
     (project / DEMO).write_text(yaml.safe_dump(catalogue, sort_keys=False))
     planned = job_stats(snakemake(project, "--dry-run"))
     assert planned == {"campaign_hifi": 1, "campaign_rom": 1, "campaign_library": 1,
