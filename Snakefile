@@ -2,6 +2,7 @@
 #   snakemake --cores 2                      full reproduction (default profile)
 #   snakemake --cores 2 --config profile=quick
 #   snakemake --report results/report/snakemake.html
+#   snakemake --cores 2 campaign --config campaign=config/campaigns/demo.yaml   (workflow/rules/campaign.smk)
 import json
 import sys
 
@@ -32,6 +33,7 @@ include: "workflow/rules/rom.smk"
 include: "workflow/rules/branch.smk"
 include: "workflow/rules/hifi.smk"
 include: "workflow/rules/report.smk"
+include: "workflow/rules/campaign.smk"
 
 
 rule all:

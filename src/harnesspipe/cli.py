@@ -22,6 +22,7 @@ COMMAND_MODULES = (
     "harnesspipe.commands.hifi",
     "harnesspipe.commands.report",
     "harnesspipe.commands.stage",
+    "harnesspipe.commands.campaign",
     "harnesspipe.commands.cards",
 )
 

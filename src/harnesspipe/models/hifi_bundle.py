@@ -32,6 +32,7 @@ from harnesspipe.fe.elements.shell_bt import (HOURGLASS_COEF, init_shell_state, 
 from harnesspipe.fe.materials.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
 from harnesspipe.models import hifi_mesh as hm
+from harnesspipe.models.hifi_mesh_parts import tape_material
 from harnesspipe.models.hifi_parts import Wires
 from harnesspipe.models.hifi_ties import BundleTies
 from harnesspipe.fe.elements.shell_bt_element import MAT_TUBE
@@ -96,7 +97,7 @@ def shell_materials(mesh, inp: HifiInputs):
     mat = np.zeros((n, tube_wall.ROW_WIDTH if resultant else 6))
     thick = np.zeros(n)
     rho = np.zeros(n)
-    tape = cfg["materials"]["pvc_tape"]
+    tape = tape_material(cfg, inp.case)
     sel = mesh.shell_part == hm.PART_TAPE
     mat[sel, :6] = [tape["E"], tape["nu"], tape["sigma_y"], tape["K"], tape["n"], 0.0]
     thick[sel] = tape["thickness"]
@@ -158,8 +159,9 @@ class BundleSystem(BundleTies):
         self.quat = np.zeros((n, 4))
         self.quat[:, 0] = 1.0
         self.nw = mesh.n_wire_nodes
-        types = [dict(inp.config["materials"][f"wire_type{t}"]) for t in (1, 2)]
-        self.wires = Wires(mesh.X, mesh.beam_conn, mesh.wire_type[mesh.beam_wire] - 1, types,
+        numbers = np.unique(mesh.wire_type)            # the bundle's wire types (materials.wire_typeN)
+        types = [dict(inp.config["materials"][f"wire_type{t}"]) for t in numbers]
+        self.wires = Wires(mesh.X, mesh.beam_conn, np.searchsorted(numbers, mesh.wire_type[mesh.beam_wire]), types,
                            inp.resolution["n_rings"], inp.resolution["n_sectors"], 3, ex["f_m"])
         self.mass = np.zeros((n, 6))
         self.wires.add_mass(self.mass)

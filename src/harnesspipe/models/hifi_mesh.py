@@ -61,7 +61,7 @@ class HifiMesh:
     wire_nodes: np.ndarray        # (n_wires, n_el + 1) node ids along each wire (x increasing)
     beam_conn: np.ndarray         # (n_beam, 2)
     beam_wire: np.ndarray         # (n_beam,) wire index of each beam
-    wire_type: np.ndarray         # (n_wires,) 1 or 2
+    wire_type: np.ndarray         # (n_wires,) type number N of materials.wire_typeN
     wire_radius: np.ndarray       # (n_wires,) d_outer / 2
     wire_yz: np.ndarray           # (n_wires, 2) cross-section position (y, z)
     shell_conn: np.ndarray        # (n_shell, 4) outward-ordered quads
@@ -194,7 +194,7 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
     Parts, numbered in this order: the wires' beams, the covering (tube or fabric), the
     end bands (left, right; none on a TWB with a helix) and the helical tape."""
     res = _resolution(resolution)
-    sample = Sample.from_config(config)
+    sample = Sample.from_config(config, case)
     taping = _check_case(case, config, res, sample)
     bundle = wire_bundle(case, config)
     cov = covering(case, config, bundle, sample.t_tape)

@@ -65,9 +65,16 @@ def _grid(P, periodic: bool):
     return pts, conn, ids
 
 
+def tape_material(config: dict, case: dict) -> dict:
+    """The materials entry of the case's tape: ``case["tape"]`` (a campaign construction's
+    tape, :mod:`harnesspipe.campaign.catalogue`), by default ``pvc_tape`` (Table 1)."""
+    return config["materials"][case.get("tape", "pvc_tape")]
+
+
 @dataclass(frozen=True)
 class Sample:
-    """Axial layout of the three-point sample (config ``three_point``) and the PVC tape, mm."""
+    """Axial layout of the three-point sample (config ``three_point``) and the tape
+    (:func:`tape_material`), mm."""
 
     L_s: float       # sample length
     l_tube: float    # tube (covering) length l
@@ -78,8 +85,8 @@ class Sample:
     w_tape: float    # tape width w
 
     @classmethod
-    def from_config(cls, config: dict) -> "Sample":
-        tp, tape = config["three_point"], config["materials"]["pvc_tape"]
+    def from_config(cls, config: dict, case: dict | None = None) -> "Sample":
+        tp, tape = config["three_point"], tape_material(config, case or {})
         return cls(tp["sample_length"], tp["tube_length"], tp["taped_end"], tp["span"],
                    0.5 * tp["pin_diameter"], tape["thickness"], tape["width"])
 

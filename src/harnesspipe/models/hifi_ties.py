@@ -10,6 +10,7 @@ from harnesspipe.fe.assembly.groups import BeamTies, QuadTies
 from harnesspipe.fe.assembly.lanes import stack_groups
 from harnesspipe.fe.contact.tie_targets import make_ties
 from harnesspipe.models import hifi_mesh as hm
+from harnesspipe.models.hifi_mesh_parts import tape_material
 
 TIE_TOL = {hm.TIE_COVERING: 0.3, hm.TIE_WIRES: 0.5, hm.TIE_TAPE: 0.3}   # mm: facet chord sag / hexagonal bundle under a round band
 I8, F8 = np.int64, float
@@ -37,7 +38,7 @@ class BundleTies:
         if not self.has_shells or mesh.tie_nodes.size == 0:
             return
         tape = self.sconn[mesh.shell_part == hm.PART_TAPE]
-        tape_t = 0.5 * self.inp.config["materials"]["pvc_tape"]["thickness"]
+        tape_t = 0.5 * tape_material(self.inp.config, self.inp.case)["thickness"]
         for target in (hm.TIE_COVERING, hm.TIE_WIRES, hm.TIE_TAPE):
             sel = mesh.tie_target == target
             if not sel.any():

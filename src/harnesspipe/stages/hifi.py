@@ -34,8 +34,11 @@ def case_definition(cfg: dict, case: str) -> dict:
     return dict(cases[case])
 
 
-def covering_properties(cfg: dict, table2: Path | None) -> dict:
-    """E, sigma_y, K, n per covering: the tensile stage's Table 2 CSV, else the config."""
+def covering_properties(cfg: dict, table2: Path | None, values: dict | None = None) -> dict:
+    """E, sigma_y, K, n per covering: ``values`` (a campaign's, read from a Table 2 before),
+    the tensile stage's Table 2 CSV, else the config."""
+    if values is not None:
+        return {k: dict(v) for k, v in values.items()}
     if table2 is None:
         source = cfg["hifi"]["coverings"]
         if source != "paper":
@@ -56,17 +59,18 @@ def covering_properties(cfg: dict, table2: Path | None) -> dict:
 
 
 def parameters(cfg: dict, overrides: dict, table2: Path | None = None,
-               interface: dict | None = None) -> dict:
+               interface: dict | None = None, covering_values: dict | None = None) -> dict:
     """Everything a run needs, as plain values: interface, explicit, resolution, coverings,
     build.  ``interface`` (e.g. from :func:`interface_choice`) replaces the config's start
     values (``hifi.parameters``; its build-state keys the config's ``hifi.build``); the
-    ``--set`` ``overrides`` come last.  Bad values raise ConfigError naming the key."""
+    ``--set`` ``overrides`` come last; ``covering_values``: see :func:`covering_properties`.
+    Bad values raise ConfigError naming the key."""
     from harnesspipe.config import resolution
     p = {
         "interface": {**cfg["interfaces"], **cfg["hifi"]["parameters"]},
         "explicit": {**cfg["hifi"]["explicit"], "f_m": cfg["explicit"]["f_m"]},
         "resolution": dict(resolution(cfg)["hifi"]),
-        "coverings": covering_properties(cfg, table2),
+        "coverings": covering_properties(cfg, table2, covering_values),
         "build": dict(cfg["hifi"]["build"]),
         "geometry": {},             # --set <tube>.pitch: the corrugation pitch (an assumption)
     }
@@ -135,11 +139,11 @@ def interface_choice(cfg: dict, choice: str | Path) -> tuple[str, dict]:
 
 
 def inputs(cfg: dict, case: str, overrides: dict, table2: Path | None = None,
-           interface: dict | None = None):
+           interface: dict | None = None, covering_values: dict | None = None):
     """The :class:`harnesspipe.models.hifi_bundle.HifiInputs` of one run from the config
-    (``interface``, ``overrides``: see :func:`parameters`)."""
+    (``interface``, ``overrides``, ``covering_values``: see :func:`parameters`)."""
     from harnesspipe.models.hifi_bundle import HifiInputs
-    p = parameters(cfg, overrides, table2, interface)
+    p = parameters(cfg, overrides, table2, interface, covering_values)
     res = p["resolution"]
     definition = case_definition(cfg, case)
     t_total = p["explicit"].get("t_total", res["t_total"] * definition.get("t_total_scale", 1.0))
@@ -152,12 +156,14 @@ def inputs(cfg: dict, case: str, overrides: dict, table2: Path | None = None,
 
 def run_case(cfg: dict, case: str, overrides: dict, *, coverings: Path | None, out_csv: Path,
              summary_json: Path, outdir: Path, interface: dict | None = None,
-             interface_source: str = "config hifi.parameters", progress=None) -> dict:
+             interface_source: str = "config hifi.parameters", progress=None,
+             covering_values: dict | None = None) -> dict:
     """Run one virtual test and write its artefacts; returns the summary.  ``progress``: the
-    model's progress callback (:func:`harnesspipe.models.hifi.three_point`)."""
+    model's progress callback (:func:`harnesspipe.models.hifi.three_point`);
+    ``covering_values``: see :func:`covering_properties`."""
     from harnesspipe.models.hifi import three_point
     from harnesspipe.stages.common import write_csv, write_json
-    inp = inputs(cfg, case, overrides, coverings, interface)
+    inp = inputs(cfg, case, overrides, coverings, interface, covering_values)
     run = three_point(inp, progress=progress)
     outdir = Path(outdir)
     write_csv(outdir / "energies.csv", run.history)
