@@ -83,6 +83,7 @@ def tree(tmp_path):
          "ke_ie_max": 0.05, "energy_error": 0.001, "contact_pairs_max": 12,
          "measured": {"test_id": "bend_cwb19_t2_closed", "error_l2": 10.0, "error_rel": 0.5}}))
     (res / "hifi" / "interface.csv").write_text("parameter,value\nmu_rtb,0.595\ndelta0,0.05\n")
+    fits["hifi"] = [res / "hifi" / "interface.csv", virtual / "summary.json"]   # as the rule passes them
     chain_curve = pd.DataFrame({"case": "cwb19_t2_closed", "displacement_mm": U, "force_N": F_HIFI})
     _fit(res / "hifi" / "chain" / "mu_rtb", chain_curve, trace_n=2, stage="hifi", item="mu_rtb",
          test_id="bend_cwb19_t2_closed", error_rel=0.5, parameters={"mu_rtb": 0.595}, bounds=[0.05, 0.6],

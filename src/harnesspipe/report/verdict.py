@@ -371,6 +371,8 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
         out.append(f"{len(nose)} parameter{'s carry' if len(nose) > 1 else ' carries'} no standard error "
                    f"({', '.join(stages)}): how well the data fix {'them' if len(nose) > 1 else 'it'} is not known.")
     for stage, paths in fits.items():
+        if stage == "hifi":   # the chain's targets (interface.csv, summaries): its fits follow below
+            continue
         for p in paths:
             fit = read_fit(p)
             chi = fit.get("chi_square") or {}
