@@ -157,8 +157,8 @@ def test_report_leads_with_the_verdict_and_generated_limitations(tree):
             "relative errors of 50 %; their force is 50 % of the measured force") in limits
     assert ("they reproduce the hi-fi curves to 6 % but the measured means only to 47 %") in limits
     assert ("4 parameters sit on a bound of their search, so the value reflects the bound, not the data: "
-            "sigma_Y of closed tube (ridged polypropylene); mu_rtb (hi-fi interface); K of 19 x type 2, closed tube; "
-            "n of 19 x type 2, closed tube.") in limits
+            "sigma_Y of closed tube (ridged polypropylene); mu_rtb (hi-fi interface); K and n of 19 x type 2, "
+            "closed tube.") in limits
     assert "The data do not determine K of closed tube (ridged polypropylene); delta0 (hi-fi interface)" in limits
     assert "quick profile" in limits and "synthetic twin" not in limits     # no truth file: not said
     verdict_table = page[page.index("id='parameters'"):page.index("id='contents'")]
