@@ -162,7 +162,7 @@ def test_report_leads_with_the_verdict_and_generated_limitations(tree):
     assert "The data do not determine K of closed tube (ridged polypropylene); delta0 (hi-fi interface)" in limits
     assert "quick profile" in limits and "synthetic twin" not in limits     # no truth file: not said
     verdict_table = page[page.index("id='parameters'"):page.index("id='contents'")]
-    assert verdict_table.count("<tr>") == 1 + 11
+    assert verdict_table.count("<tr>") == 1 + 11 and verdict_table.count("<tr class='stage'>") == 4
     assert "st-bound'>on a bound</span> <span class='note'>[0.05, 0.6]</span>" in verdict_table
     assert "http://" not in page and "https://" not in page
 

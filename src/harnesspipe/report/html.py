@@ -64,7 +64,9 @@ nav.toc ul{margin:.2em 0;padding-left:1.2em} nav.toc>ul{columns:2 22em}
 .st-rough{background:#e6f2d0;color:#3a5a00} .st-ok{background:#cdeccd;color:#0a5a0a}
 details{margin:1em 0;border:1px solid #ddd;padding:.3em .8em} summary{cursor:pointer;font-weight:600}
 table.corr td{text-align:center;min-width:3.5em} table.files td{text-align:left}
-table.verdict td{vertical-align:top;text-align:right} table.verdict td.txt{text-align:left}
+table.verdict{font-size:.93em} table.verdict td{vertical-align:top;text-align:right;white-space:nowrap}
+table.verdict td.txt{white-space:normal} table.verdict .status{white-space:normal}
+table.verdict td:last-child{min-width:11em} table.verdict tr.stage td{background:#eef3f8;font-weight:600} table.verdict td.txt{text-align:left}
 """
 
 
@@ -299,8 +301,8 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
 
 
 def _status_badges(statuses) -> str:
-    return "".join(f"<span class='status {verdict.STATUS_CLASS[st]}'>{html.escape(st)}</span>"
-                   for st in statuses)
+    return " ".join(f"<span class='status {verdict.STATUS_CLASS[st]}'>{html.escape(st)}</span>"
+                    for st in statuses)
 
 
 def _fitted_cell(row: "verdict.Row | None", value) -> Raw:
@@ -927,19 +929,23 @@ def parameters_section(rows: list, cfg: dict, truth: dict) -> str:
     fit's error against the test (its goal) and the statuses, grouped by stage and item."""
     if not rows:
         return ""
-    header = ["stage", "item", "parameter", "value", "paper", "difference", "SE (Fisher)", "SE (replicates)"]
+    header = ["item", "parameter", "value", "paper", "difference", "SE (Fisher)", "SE (replicates)"]
     header += ["truth (synthetic)"] if truth else []
-    header += ["fit error vs test (goal)", "status"]
+    header += ["fit error (goal)", "status"]
     body, groups = [], {}
     for r in rows:
         groups.setdefault((r.stage, r.item), []).append(r)
+    stage_of_last = None
     for (stage, item), group in groups.items():
+        if stage != stage_of_last:   # a row naming the stage above its items
+            body.append(f"<tr class='stage'><td class='txt' colspan='{len(header)}'>"
+                        f"{html.escape(verdict.STAGE_NAMES[stage])}</td></tr>")
+            stage_of_last = stage
         for k, r in enumerate(group):
             cells = ""
             if k == 0:
                 span = f" rowspan='{len(group)}'"
-                cells += (f"<td class='txt'{span}>{html.escape(verdict.STAGE_NAMES[stage])}</td>"
-                          f"<td class='txt'{span}>{html.escape(physical_name(item, cfg))}<br>"
+                cells += (f"<td class='txt'{span}>{html.escape(physical_name(item, cfg))}<br>"
                           f"<code class='note'>{html.escape(item)}</code></td>")
             fisher = r.se if r.se_source == "Fisher" else None
             cells += f"<td class='txt'>{html.escape(SYMBOLS.get(r.parameter, r.parameter))}</td>"
@@ -947,7 +953,7 @@ def parameters_section(rows: list, cfg: dict, truth: dict) -> str:
                       "" if r.paper is None else f"{r.paper:g}",
                       "" if r.difference is None else f"{100 * r.difference:+.1f} %",
                       _se_cell(fisher), _se_cell(r.se_replicates)]
-            values += ["" if r.truth is None else f"{r.truth:g}"] if truth else []
+            values += ["" if r.truth is None else f"{r.truth:.4g}"] if truth else []
             values += ["" if r.error is None else f"{100 * r.error:.1f} % ({100 * r.goal:.0f} %)"]
             cells += "".join(f"<td>{html.escape(v)}</td>" for v in values)
             badges = _status_badges(r.statuses)
