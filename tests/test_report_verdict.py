@@ -188,7 +188,7 @@ def test_raw_data_and_repeats_folded_and_physical_names(tree):
     assert "<td>0.05</td><td><span class='bad'>above 0.02</span></td>" in page    # KE/IE 0.05 > 2 %
     assert "<td>0.001</td><td>within 0.01</td>" in page                           # energy balance
     assert "Below zero (contact -20 N mm; external work 300 N mm)" in page and "closes to 0.001" in page
-    assert "<td>50.0 %</td><td><span class='bad'>above the goal 10 %</span></td>" in page
+    assert "<td>50.0&nbsp;%</td><td><span class='bad'>above the goal 10 %</span></td>" in page
     assert "Optimiser: 1 evaluation (no trace drawn)." in page and "Optimiser: 2 evaluations" in page
     assert 'alt="trace closed_tube"' in page and 'alt="trace cohesive"' not in page
     assert "Parameter correlations (Fisher" in page and "+0.50</td>" in page

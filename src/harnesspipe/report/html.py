@@ -88,7 +88,7 @@ def _table(header: list[str], rows: list[list]) -> str:
             return str(v)
         if isinstance(v, float):
             return f"{v:.4g}"
-        return html.escape(str(v))
+        return html.escape(str(v)).replace(" %", "&nbsp;%")   # a number and its % on one line
     head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{cell(v)}</td>" for v in r) + "</tr>" for r in rows)
     return f"<div class='wide'><table><tr>{head}</tr>{body}</table></div>"
@@ -757,7 +757,7 @@ def _fidelity_table(root: Path, cfg: dict, measured: dict | None = None) -> str:
         if measured and case in measured and (path.parent / "curve.csv").exists():
             ratio = f"{100 * verdict.force_ratio(pd.read_csv(path.parent / 'curve.csv'), measured[case]):.0f} %"
         rows.append(f"<tr><td>{html.escape(labelled(case, cfg))}</td><td>{html.escape(role)}</td>"
-                    f"<td>{100 * err:.1f} %</td><td>{100 * goal:.0f} %</td>{judged}<td>{ratio}</td></tr>")
+                    f"<td>{100 * err:.1f}&nbsp;%</td><td>{100 * goal:.0f}&nbsp;%</td>{judged}<td>{ratio}</td></tr>")
     if not rows:
         return ""
     head = "".join(f"<th>{h}</th>" for h in ("case", "role", "relative error", "goal", "verdict",
