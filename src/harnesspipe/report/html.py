@@ -65,7 +65,8 @@ nav.toc ul{margin:.2em 0;padding-left:1.2em} nav.toc>ul{columns:2 22em}
 details{margin:1em 0;border:1px solid #ddd;padding:.3em .8em} summary{cursor:pointer;font-weight:600}
 table.corr td{text-align:center;min-width:3.5em} table.files td{text-align:left}
 table.verdict{font-size:.93em} table.verdict td{vertical-align:top;text-align:right;white-space:nowrap}
-table.verdict td.txt{white-space:normal} table.verdict .status{white-space:normal}
+table.verdict td.txt{white-space:normal}
+table.rom td{vertical-align:top;white-space:nowrap} table.rom td.txt{white-space:normal;text-align:left} table.verdict .status{white-space:normal}
 table.verdict td:last-child{min-width:11em} table.verdict tr.stage td{background:#eef3f8;font-weight:600} table.verdict td.txt{text-align:left}
 """
 
@@ -380,7 +381,7 @@ def _rom_rows(fit: dict, errors: dict, paper: dict | None, truth: dict | None, f
     name = (f"<td class='txt' rowspan='{len(lines)}'>{html.escape(physical_name(fit['item'], cfg))}<br>"
             f"<code class='note'>{html.escape(fit['item'])}</code></td>")
     return "".join(f"<tr>{name if k == 0 else ''}<td class='txt'>{label}</td>"
-                   + "".join(f"<td>{c}</td>" for c in values + errs) + "</tr>"
+                   + "".join(f"<td>{c}</td>" for c in values + errs[:1]) + f"<td class='txt'>{errs[1]}</td></tr>"
                    for k, (label, values, errs) in enumerate(lines))
 
 
@@ -388,7 +389,7 @@ def _rom_table(rows: list[str]) -> str:
     """The ROM table: per case its fitted, paper's and true properties and its errors."""
     head = "".join(f"<th>{h}</th>" for h in ("case", "", "E [MPa]", "sigma_Y [MPa]", "K [MPa]", "n [-]",
                                              "rel. error vs its reference", "vs the test (goal)"))
-    return f"<div class='wide'><table class='verdict'><tr>{head}</tr>{''.join(rows)}</table></div>"
+    return f"<div class='wide'><table class='rom'><tr>{head}</tr>{''.join(rows)}</table></div>"
 
 
 BRANCH_ZOOM_MM = 5.0   # the second panel of the alpha overlay: where damping shows (eq. 15)
@@ -705,8 +706,9 @@ def _single_run(path: Path, root: Path, ctx: _HifiContext) -> tuple[str, str]:
 
 
 def _single_runs(root: Path, runs: list[Path], ctx: _HifiContext) -> str:
-    """The single runs by group: virtual tests, then folded away (<details>) the cross-check
-    runs and the best points of the fits (repeats of runs shown in their fit)."""
+    """The single runs by group, each group folded (<details>): the virtual tests (summed up
+    by the fidelity table above), the cross-check runs and the best points of the fits
+    (repeats of runs shown in their fit)."""
     blocks = {group: [] for group, _ in RUN_GROUPS}
     for path in runs:
         group, block = _single_run(path, root, ctx)
@@ -714,11 +716,7 @@ def _single_runs(root: Path, runs: list[Path], ctx: _HifiContext) -> str:
             blocks[group].append(block)
     out = []
     for group, head in RUN_GROUPS:
-        if not blocks[group]:
-            continue
-        if group == "virtual":
-            out.append(f"<h3>{head}</h3>" + "".join(blocks[group]))
-        else:
+        if blocks[group]:
             out.append(f"<h3>{head}</h3><details><summary>{len(blocks[group])} runs: curves, energies, "
                        f"shapes and solver statistics</summary>" + "".join(blocks[group]) + "</details>")
     return "".join(out)
