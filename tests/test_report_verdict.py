@@ -195,7 +195,7 @@ def test_raw_data_and_repeats_folded_and_physical_names(tree):
     assert 'alt="branch alpha overlay"' in page
     rom = page[page.index("id='rom'"):page.index("id='branch'")]
     assert "<td class='txt'>fitted to the hi-fi virtual test</td>" in rom and "recovered" not in page
-    assert "<td>0.0001 <span class='status st-bound'>on a bound</span></td>" in rom
+    assert "<td>0.0001<br><span class='status st-bound'>on a bound</span></td>" in rom
     assert ("<td>6.0 %</td><td class='txt'>47.0 % (10 %, calibration) <span class='status st-mismatch'>model does not "
             "match the test</span></td>") in rom
 

@@ -310,7 +310,7 @@ def _fitted_cell(row: "verdict.Row | None", value) -> Raw:
     """A fitted value, flagged when the verdict puts it on a bound."""
     text = html.escape(f"{value:.4g}" if isinstance(value, float) else str(value))
     if row is not None and verdict.ON_BOUND in row.statuses:
-        text += " " + _status_badges([verdict.ON_BOUND])
+        text += "<br>" + _status_badges([verdict.ON_BOUND])
     return Raw(text)
 
 
