@@ -281,7 +281,9 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
     text += f'<p class="determined">{html.escape(sentence)}</p>' if sentence else ""
     text += correlation_table(fit)
     title = physical_name(fit["item"], cfg)
-    figs = [_img(plots.fit_figure(prepared, curve, title=title, reference=reference), f"fit {fit['item']}")]
+    model = "ROM (fitted)" if fit.get("stage") == "rom" else "simulated"
+    figs = [_img(plots.fit_figure(prepared, curve, title=title, reference=reference, label=model),
+                 f"fit {fit['item']}")]
     if fit.get("flow_stress"):
         figs.append(_img(plots.flow_stress_figure(fit["flow_stress"], title=f"{title}: flow stress"),
                          f"flow stress {fit['item']}"))
