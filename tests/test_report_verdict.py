@@ -161,6 +161,8 @@ def test_report_leads_with_the_verdict_and_generated_limitations(tree):
             "closed tube.") in limits
     assert "The data do not determine K of closed tube (ridged polypropylene); delta0 (hi-fi interface)" in limits
     assert "quick profile" in limits and "synthetic twin" not in limits     # no truth file: not said
+    assert ("1 of 1 hi-fi virtual tests exceed the quasi-static target KE/IE 0.02 of Sec. 4.1 (up to 0.05; "
+            "19 x type 2, closed tube)") in limits
     verdict_table = page[page.index("id='parameters'"):page.index("id='contents'")]
     assert verdict_table.count("<tr>") == 1 + 11 and verdict_table.count("<tr class='stage'>") == 4
     assert "st-bound'>on a bound</span> <span class='note'>[0.05, 0.6]</span>" in verdict_table

@@ -315,6 +315,20 @@ def _fit_name(row: Row, cfg: dict) -> str:
     return f"the {STAGE_NAMES[row.stage]} fit of {physical_name(row.item, cfg)}"
 
 
+def _quasi_static(results: Path, cfg: dict) -> str | None:
+    """The hi-fi virtual tests whose KE/IE exceeds the paper's quasi-static target
+    (``explicit.ke_ie_max``, Sec. 4.1), or None."""
+    target = cfg.get("explicit", {}).get("ke_ie_max")
+    runs = {p.parent.name: json.loads(p.read_text()).get("ke_ie_max")
+            for p in sorted((Path(results) / "hifi" / "virtual").glob("*/summary.json"))}
+    above = {k: float(v) for k, v in runs.items() if v is not None and target is not None and v > target}
+    if not above:
+        return None
+    return (f"{len(above)} of {len(runs)} hi-fi virtual tests exceed the quasi-static target KE/IE "
+            f"{target:g} of Sec. 4.1 (up to {max(above.values()):.3g}; "
+            f"{', '.join(physical_name(k, cfg) for k in above)}): their inertia is not negligible.")
+
+
 def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
     """Each virtual test with a measured test: case, role, error, goal, force ratio."""
     out = []
@@ -400,6 +414,8 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
     if unconverged:
         out.append("The optimiser stopped at its evaluation limit without converging for: "
                    + "; ".join(unconverged) + ".")
+    sentence = _quasi_static(results, cfg)
+    out += [sentence] if sentence else []
     if truth:
         out.append("The test data are the synthetic twin, generated from the paper's values "
                    "(data/experimental/README.md): agreement with the paper's tables is agreement "
