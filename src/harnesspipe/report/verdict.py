@@ -326,7 +326,7 @@ def _quasi_static(results: Path, cfg: dict) -> str | None:
         return None
     return (f"{len(above)} of {len(runs)} hi-fi virtual tests exceed the quasi-static target KE/IE "
             f"{target:g} of Sec. 4.1 (up to {max(above.values()):.3g}; "
-            f"{', '.join(physical_name(k, cfg) for k in above)}): their inertia is not negligible.")
+            f"{'; '.join(physical_name(k, cfg) for k in above)}): their inertia is not negligible.")
 
 
 def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
