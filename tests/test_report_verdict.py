@@ -83,6 +83,7 @@ def tree(tmp_path):
          "ke_ie_max": 0.05, "energy_error": 0.001, "contact_pairs_max": 12,
          "measured": {"test_id": "bend_cwb19_t2_closed", "error_l2": 10.0, "error_rel": 0.5}}))
     (res / "hifi" / "interface.csv").write_text("parameter,value\nmu_rtb,0.595\ndelta0,0.05\n")
+    fits["hifi"] = [res / "hifi" / "interface.csv", virtual / "summary.json"]   # as the rule passes them
     chain_curve = pd.DataFrame({"case": "cwb19_t2_closed", "displacement_mm": U, "force_N": F_HIFI})
     _fit(res / "hifi" / "chain" / "mu_rtb", chain_curve, trace_n=2, stage="hifi", item="mu_rtb",
          test_id="bend_cwb19_t2_closed", error_rel=0.5, parameters={"mu_rtb": 0.595}, bounds=[0.05, 0.6],
@@ -156,12 +157,14 @@ def test_report_leads_with_the_verdict_and_generated_limitations(tree):
             "relative errors of 50 %; their force is 50 % of the measured force") in limits
     assert ("they reproduce the hi-fi curves to 6 % but the measured means only to 47 %") in limits
     assert ("4 parameters sit on a bound of their search, so the value reflects the bound, not the data: "
-            "sigma_Y of closed tube (ridged polypropylene); mu_rtb (hi-fi interface); K of 19 x type 2, closed tube; "
-            "n of 19 x type 2, closed tube.") in limits
+            "sigma_Y of closed tube (ridged polypropylene); mu_rtb (hi-fi interface); K and n of 19 x type 2, "
+            "closed tube.") in limits
     assert "The data do not determine K of closed tube (ridged polypropylene); delta0 (hi-fi interface)" in limits
     assert "quick profile" in limits and "synthetic twin" not in limits     # no truth file: not said
+    assert ("1 of 1 hi-fi virtual tests exceed the quasi-static target KE/IE 0.02 of Sec. 4.1 (up to 0.05; "
+            "19 x type 2, closed tube)") in limits
     verdict_table = page[page.index("id='parameters'"):page.index("id='contents'")]
-    assert verdict_table.count("<tr>") == 1 + 11
+    assert verdict_table.count("<tr>") == 1 + 11 and verdict_table.count("<tr class='stage'>") == 4
     assert "st-bound'>on a bound</span> <span class='note'>[0.05, 0.6]</span>" in verdict_table
     assert "http://" not in page and "https://" not in page
 
@@ -187,15 +190,15 @@ def test_raw_data_and_repeats_folded_and_physical_names(tree):
     assert "<td>0.05</td><td><span class='bad'>above 0.02</span></td>" in page    # KE/IE 0.05 > 2 %
     assert "<td>0.001</td><td>within 0.01</td>" in page                           # energy balance
     assert "Below zero (contact -20 N mm; external work 300 N mm)" in page and "closes to 0.001" in page
-    assert "<td>50.0 %</td><td><span class='bad'>above the goal 10 %</span></td>" in page
+    assert "<td>50.0&nbsp;%</td><td><span class='bad'>above the goal 10 %</span></td>" in page
     assert "Optimiser: 1 evaluation (no trace drawn)." in page and "Optimiser: 2 evaluations" in page
     assert 'alt="trace closed_tube"' in page and 'alt="trace cohesive"' not in page
     assert "Parameter correlations (Fisher" in page and "+0.50</td>" in page
     assert 'alt="branch alpha overlay"' in page
     rom = page[page.index("id='rom'"):page.index("id='branch'")]
     assert "<td class='txt'>fitted to the hi-fi virtual test</td>" in rom and "recovered" not in page
-    assert "<td>0.0001 <span class='status st-bound'>on a bound</span></td>" in rom
-    assert ("<td>6.0 %</td><td>47.0 % (10 %, calibration) <span class='status st-mismatch'>model does not "
+    assert "<td>0.0001<br><span class='status st-bound'>on a bound</span></td>" in rom
+    assert ("<td>6.0 %</td><td class='txt'>47.0 % (10 %, calibration) <span class='status st-mismatch'>model does not "
             "match the test</span></td>") in rom
 
 

@@ -64,7 +64,10 @@ nav.toc ul{margin:.2em 0;padding-left:1.2em} nav.toc>ul{columns:2 22em}
 .st-rough{background:#e6f2d0;color:#3a5a00} .st-ok{background:#cdeccd;color:#0a5a0a}
 details{margin:1em 0;border:1px solid #ddd;padding:.3em .8em} summary{cursor:pointer;font-weight:600}
 table.corr td{text-align:center;min-width:3.5em} table.files td{text-align:left}
-table.verdict td{vertical-align:top;text-align:right} table.verdict td.txt{text-align:left}
+table.verdict{font-size:.93em} table.verdict td{vertical-align:top;text-align:right;white-space:nowrap}
+table.verdict td.txt{white-space:normal}
+table.rom td{vertical-align:top;white-space:nowrap} table.rom td.txt{white-space:normal;text-align:left} table.verdict .status{white-space:normal}
+table.verdict td:last-child{min-width:11em} table.verdict tr.stage td{background:#eef3f8;font-weight:600} table.verdict td.txt{text-align:left}
 """
 
 
@@ -86,7 +89,7 @@ def _table(header: list[str], rows: list[list]) -> str:
             return str(v)
         if isinstance(v, float):
             return f"{v:.4g}"
-        return html.escape(str(v))
+        return html.escape(str(v)).replace(" %", "&nbsp;%")   # a number and its % on one line
     head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{cell(v)}</td>" for v in r) + "</tr>" for r in rows)
     return f"<div class='wide'><table><tr>{head}</tr>{body}</table></div>"
@@ -278,7 +281,9 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
     text += f'<p class="determined">{html.escape(sentence)}</p>' if sentence else ""
     text += correlation_table(fit)
     title = physical_name(fit["item"], cfg)
-    figs = [_img(plots.fit_figure(prepared, curve, title=title, reference=reference), f"fit {fit['item']}")]
+    model = "ROM (fitted)" if fit.get("stage") == "rom" else "simulated"
+    figs = [_img(plots.fit_figure(prepared, curve, title=title, reference=reference, label=model),
+                 f"fit {fit['item']}")]
     if fit.get("flow_stress"):
         figs.append(_img(plots.flow_stress_figure(fit["flow_stress"], title=f"{title}: flow stress"),
                          f"flow stress {fit['item']}"))
@@ -299,15 +304,15 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
 
 
 def _status_badges(statuses) -> str:
-    return "".join(f"<span class='status {verdict.STATUS_CLASS[st]}'>{html.escape(st)}</span>"
-                   for st in statuses)
+    return " ".join(f"<span class='status {verdict.STATUS_CLASS[st]}'>{html.escape(st)}</span>"
+                    for st in statuses)
 
 
 def _fitted_cell(row: "verdict.Row | None", value) -> Raw:
     """A fitted value, flagged when the verdict puts it on a bound."""
     text = html.escape(f"{value:.4g}" if isinstance(value, float) else str(value))
     if row is not None and verdict.ON_BOUND in row.statuses:
-        text += " " + _status_badges([verdict.ON_BOUND])
+        text += "<br>" + _status_badges([verdict.ON_BOUND])
     return Raw(text)
 
 
@@ -378,7 +383,7 @@ def _rom_rows(fit: dict, errors: dict, paper: dict | None, truth: dict | None, f
     name = (f"<td class='txt' rowspan='{len(lines)}'>{html.escape(physical_name(fit['item'], cfg))}<br>"
             f"<code class='note'>{html.escape(fit['item'])}</code></td>")
     return "".join(f"<tr>{name if k == 0 else ''}<td class='txt'>{label}</td>"
-                   + "".join(f"<td>{c}</td>" for c in values + errs) + "</tr>"
+                   + "".join(f"<td>{c}</td>" for c in values + errs[:1]) + f"<td class='txt'>{errs[1]}</td></tr>"
                    for k, (label, values, errs) in enumerate(lines))
 
 
@@ -386,7 +391,7 @@ def _rom_table(rows: list[str]) -> str:
     """The ROM table: per case its fitted, paper's and true properties and its errors."""
     head = "".join(f"<th>{h}</th>" for h in ("case", "", "E [MPa]", "sigma_Y [MPa]", "K [MPa]", "n [-]",
                                              "rel. error vs its reference", "vs the test (goal)"))
-    return f"<div class='wide'><table class='verdict'><tr>{head}</tr>{''.join(rows)}</table></div>"
+    return f"<div class='wide'><table class='rom'><tr>{head}</tr>{''.join(rows)}</table></div>"
 
 
 BRANCH_ZOOM_MM = 5.0   # the second panel of the alpha overlay: where damping shows (eq. 15)
@@ -703,8 +708,9 @@ def _single_run(path: Path, root: Path, ctx: _HifiContext) -> tuple[str, str]:
 
 
 def _single_runs(root: Path, runs: list[Path], ctx: _HifiContext) -> str:
-    """The single runs by group: virtual tests, then folded away (<details>) the cross-check
-    runs and the best points of the fits (repeats of runs shown in their fit)."""
+    """The single runs by group, each group folded (<details>): the virtual tests (summed up
+    by the fidelity table above), the cross-check runs and the best points of the fits
+    (repeats of runs shown in their fit)."""
     blocks = {group: [] for group, _ in RUN_GROUPS}
     for path in runs:
         group, block = _single_run(path, root, ctx)
@@ -712,11 +718,7 @@ def _single_runs(root: Path, runs: list[Path], ctx: _HifiContext) -> str:
             blocks[group].append(block)
     out = []
     for group, head in RUN_GROUPS:
-        if not blocks[group]:
-            continue
-        if group == "virtual":
-            out.append(f"<h3>{head}</h3>" + "".join(blocks[group]))
-        else:
+        if blocks[group]:
             out.append(f"<h3>{head}</h3><details><summary>{len(blocks[group])} runs: curves, energies, "
                        f"shapes and solver statistics</summary>" + "".join(blocks[group]) + "</details>")
     return "".join(out)
@@ -755,7 +757,7 @@ def _fidelity_table(root: Path, cfg: dict, measured: dict | None = None) -> str:
         if measured and case in measured and (path.parent / "curve.csv").exists():
             ratio = f"{100 * verdict.force_ratio(pd.read_csv(path.parent / 'curve.csv'), measured[case]):.0f} %"
         rows.append(f"<tr><td>{html.escape(labelled(case, cfg))}</td><td>{html.escape(role)}</td>"
-                    f"<td>{100 * err:.1f} %</td><td>{100 * goal:.0f} %</td>{judged}<td>{ratio}</td></tr>")
+                    f"<td>{100 * err:.1f}&nbsp;%</td><td>{100 * goal:.0f}&nbsp;%</td>{judged}<td>{ratio}</td></tr>")
     if not rows:
         return ""
     head = "".join(f"<th>{h}</th>" for h in ("case", "role", "relative error", "goal", "verdict",
@@ -927,19 +929,23 @@ def parameters_section(rows: list, cfg: dict, truth: dict) -> str:
     fit's error against the test (its goal) and the statuses, grouped by stage and item."""
     if not rows:
         return ""
-    header = ["stage", "item", "parameter", "value", "paper", "difference", "SE (Fisher)", "SE (replicates)"]
+    header = ["item", "parameter", "value", "paper", "difference", "SE (Fisher)", "SE (replicates)"]
     header += ["truth (synthetic)"] if truth else []
-    header += ["fit error vs test (goal)", "status"]
+    header += ["fit error (goal)", "status"]
     body, groups = [], {}
     for r in rows:
         groups.setdefault((r.stage, r.item), []).append(r)
+    stage_of_last = None
     for (stage, item), group in groups.items():
+        if stage != stage_of_last:   # a row naming the stage above its items
+            body.append(f"<tr class='stage'><td class='txt' colspan='{len(header)}'>"
+                        f"{html.escape(verdict.STAGE_NAMES[stage])}</td></tr>")
+            stage_of_last = stage
         for k, r in enumerate(group):
             cells = ""
             if k == 0:
                 span = f" rowspan='{len(group)}'"
-                cells += (f"<td class='txt'{span}>{html.escape(verdict.STAGE_NAMES[stage])}</td>"
-                          f"<td class='txt'{span}>{html.escape(physical_name(item, cfg))}<br>"
+                cells += (f"<td class='txt'{span}>{html.escape(physical_name(item, cfg))}<br>"
                           f"<code class='note'>{html.escape(item)}</code></td>")
             fisher = r.se if r.se_source == "Fisher" else None
             cells += f"<td class='txt'>{html.escape(SYMBOLS.get(r.parameter, r.parameter))}</td>"
@@ -947,7 +953,7 @@ def parameters_section(rows: list, cfg: dict, truth: dict) -> str:
                       "" if r.paper is None else f"{r.paper:g}",
                       "" if r.difference is None else f"{100 * r.difference:+.1f} %",
                       _se_cell(fisher), _se_cell(r.se_replicates)]
-            values += ["" if r.truth is None else f"{r.truth:g}"] if truth else []
+            values += ["" if r.truth is None else f"{r.truth:.4g}"] if truth else []
             values += ["" if r.error is None else f"{100 * r.error:.1f} % ({100 * r.goal:.0f} %)"]
             cells += "".join(f"<td>{html.escape(v)}</td>" for v in values)
             badges = _status_badges(r.statuses)

@@ -289,15 +289,23 @@ def _pct(x: float) -> str:
 
 
 def _span(values) -> str:
-    lo, hi = min(values), max(values)
-    return _pct(lo) if _pct(lo) == _pct(hi) else f"{_pct(lo)}-{_pct(hi)}"
+    """'23-58 %' (or one value) of relative values."""
+    lo, hi = _pct(min(values)), _pct(max(values))
+    return lo if lo == hi else f"{lo.removesuffix(' %')}-{hi}"
+
+
+def _listed(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
 
 
 def _names(rows, cfg) -> str:
-    """'sigma_Y of <item>; mu_rtb (hi-fi interface); ...'."""
-    return "; ".join(f"{SYMBOLS.get(r.parameter, r.parameter)} (hi-fi interface)" if r.stage == "hifi"
-                     else f"{SYMBOLS.get(r.parameter, r.parameter)} of {physical_name(r.item, cfg)}"
-                     for r in rows)
+    """'sigma_Y, K and n of <item>; mu_rtb and delta0 (hi-fi interface); ...' (grouped by item,
+    the hi-fi interface as one)."""
+    groups: dict = {}
+    for r in rows:
+        key = "(hi-fi interface)" if r.stage == "hifi" else f"of {physical_name(r.item, cfg)}"
+        groups.setdefault(key, []).append(SYMBOLS.get(r.parameter, r.parameter))
+    return "; ".join(f"{_listed(names)} {key}" for key, names in groups.items())
 
 
 def _fit_name(row: Row, cfg: dict) -> str:
@@ -305,6 +313,20 @@ def _fit_name(row: Row, cfg: dict) -> str:
     if row.stage == "hifi":
         return f"the hi-fi step {row.item}"
     return f"the {STAGE_NAMES[row.stage]} fit of {physical_name(row.item, cfg)}"
+
+
+def _quasi_static(results: Path, cfg: dict) -> str | None:
+    """The hi-fi virtual tests whose KE/IE exceeds the paper's quasi-static target
+    (``explicit.ke_ie_max``, Sec. 4.1), or None."""
+    target = cfg.get("explicit", {}).get("ke_ie_max")
+    runs = {p.parent.name: json.loads(p.read_text()).get("ke_ie_max")
+            for p in sorted((Path(results) / "hifi" / "virtual").glob("*/summary.json"))}
+    above = {k: float(v) for k, v in runs.items() if v is not None and target is not None and v > target}
+    if not above:
+        return None
+    return (f"{len(above)} of {len(runs)} hi-fi virtual tests exceed the quasi-static target KE/IE "
+            f"{target:g} of Sec. 4.1 (up to {max(above.values()):.3g}; "
+            f"{'; '.join(physical_name(k, cfg) for k in above)}): their inertia is not negligible.")
 
 
 def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
@@ -370,7 +392,10 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
         stages = list(dict.fromkeys(STAGE_NAMES[r.stage] for r in nose))
         out.append(f"{len(nose)} parameter{'s carry' if len(nose) > 1 else ' carries'} no standard error "
                    f"({', '.join(stages)}): how well the data fix {'them' if len(nose) > 1 else 'it'} is not known.")
+    unconverged = []
     for stage, paths in fits.items():
+        if stage == "hifi":   # the chain's targets (interface.csv, summaries): its fits follow below
+            continue
         for p in paths:
             fit = read_fit(p)
             chi = fit.get("chi_square") or {}
@@ -380,13 +405,17 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
                            "model error beyond the noise; its Fisher standard errors understate the "
                            "uncertainty.")
             if not fit.get("converged", True) and fit.get("role", "calibration") == "calibration":
-                out.append(f"The optimiser of the {physical_name(fit['item'], cfg)} fit ({stage}) stopped "
-                           f"after {fit['nfev']} evaluations without converging.")
+                unconverged.append(f"{STAGE_NAMES[stage]} of {physical_name(fit['item'], cfg)} "
+                                   f"({fit['nfev']} evaluations)")
     for p in sorted((Path(results) / "hifi" / "chain").glob("*/fit.json")):
         fit = read_fit(p)
         if not fit.get("converged", True) and "not identifiable" not in str(fit.get("message", "")):
-            out.append(f"The hi-fi search of step {fit['item']} stopped after {fit['nfev']} evaluations "
-                       "without converging.")
+            unconverged.append(f"hi-fi step {fit['item']} ({fit['nfev']} evaluations)")
+    if unconverged:
+        out.append("The optimiser stopped at its evaluation limit without converging for: "
+                   + "; ".join(unconverged) + ".")
+    sentence = _quasi_static(results, cfg)
+    out += [sentence] if sentence else []
     if truth:
         out.append("The test data are the synthetic twin, generated from the paper's values "
                    "(data/experimental/README.md): agreement with the paper's tables is agreement "
