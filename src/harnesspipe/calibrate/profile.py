@@ -27,7 +27,8 @@ unbounded (None).
 The inner minimisation is Gauss-Newton in ln p (central differences: the valleys are
 narrow, a forward-difference direction stalls in them; steps of at most
 MAX_STEP, halved until S decreases; parameters the model refuses count as S = infinity),
-started from the nearest profile point moved along the linear prediction of the others.
+each point started from the others' ln p interpolated (or extrapolated) from the two
+nearest points of the profile already found.
 """
 from __future__ import annotations
 
@@ -76,6 +77,8 @@ class Profile:
         return r if np.all(np.isfinite(r)) else None
 
     def residual_or_raise(self, p: dict) -> np.ndarray:
+        """F_ref - F(p), raising ArithmeticError where the model fails (for the differences
+        of :func:`log_sensitivities`)."""
         r = self.residual(p)
         if r is None:
             raise ArithmeticError(f"the model fails at {p}")
@@ -125,8 +128,8 @@ class Profile:
         where the profile stays below the threshold out to SPAN in ln p or the model fails
         on the way or within WALK_POINTS points.  The profile is walked out in steps of
         ``step`` in ln p, each GROWTH times longer than the last but moving no other parameter
-        by more than MAX_STEP along the valley (and at least MIN_WALK), until h > 0; the root of h between the last two points by Brent's
-        method.  Each point starts from the others' ln p interpolated (or extrapolated)
+        by more than MAX_STEP along the valley (and at least MIN_WALK), until h > 0; the root
+        of h between the last two points by Brent's method.  Each point starts from the others' ln p interpolated (or extrapolated)
         from the two nearest points walked (at first: along the fit's valley direction)."""
         x_hat = np.log(self.params[name])
         others = [k for k in self.fitted if k != name]
