@@ -6,7 +6,7 @@ import pytest
 from harnesspipe.calibrate import coverage
 
 SEEDS = range(2000, 2015)        # 15 twins; the bench uses 1000..1019
-ROM_SEEDS = range(2000, 2006)    # 6 twins of the coarse-taped CWB (~17 s each on one core)
+COARSE_SEEDS = range(2000, 2004)  # 4 twins of the coarse-taped CWB (~17 s each on one core)
 SQRT3 = np.sqrt(3.0)
 
 
@@ -65,37 +65,28 @@ def test_open_tube_intervals_cover_their_truth(open_tube_rows):
     assert None not in sandwich and np.mean(sandwich) >= 0.8
 
 
-@pytest.fixture(scope="module")
-def coarse_cwb_rows(tmp_path_factory):
-    """Interval records of the ROM stage's fits (measured reference) to the coarse-taped CWB's
-    twin at ROM_SEEDS (data and fit on the quick profile's ROM mesh)."""
+def rom_rows(case: str, seeds, tmp_path_factory) -> list[dict]:
+    """Interval records of the ROM stage's fits (measured reference) to ``case``'s twin at
+    ``seeds`` (data and fit on the quick profile's ROM mesh)."""
     from harnesspipe.config import load
     cfg = load()
     rows = []
-    for seed in ROM_SEEDS:
-        work = tmp_path_factory.mktemp(f"rom{seed}")
-        rows += coverage.rom_seed(cfg, seed, ["cwb19_t2_open_coarse"], work, maxfev=1000)
+    for seed in seeds:
+        work = tmp_path_factory.mktemp(f"{case}{seed}")
+        rows += coverage.rom_seed(cfg, seed, [case], work, maxfev=1000)
     return rows
 
 
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason=(
-    "known defect (bench/RESULTS.md, 'Interval coverage of the ROM stage'): under load-cell "
-    "noise eq. 13's linear window grows into the onset of yield, so E comes out ~2 Fisher SEs "
-    "below its noise-free value on every seed and sigma_Y, n and the flow stress at 2e-3 "
-    "compensate upwards; the fix is in the estimator (E refined by least squares on every "
-    "row after the simplex), not in the interval"))
-def test_rom_intervals_cover_their_truth(coarse_cwb_rows):
-    """The ROM stage on the coarse-taped CWB's twin, the same criterion as the open tube's.
-    Fisher (vs what the stage finds on the specimens' noise-free mean curve): E and the flow
-    stress at 2e-3, 5e-3, 2e-2 have an SE and the mean square of their standardised errors is
-    within [0.5, 2], which the same SEs scaled by sqrt(3) either way fail; the reported 95 %
-    intervals of E, sigma_Y, K, n (Fisher, or the profile likelihood where the Fisher SE is
-    above 5 %) cover at least 80 %.  Sandwich (vs the population value, t on 2 dof): at least
-    80 % of its nominal 95 % intervals cover.  Every fit converged."""
-    rows = coarse_cwb_rows
+def assert_rom_criterion(rows, seeds) -> None:
+    """The open tube's criterion on the ROM stage's records.  Fisher (vs what the stage finds
+    on the specimens' noise-free mean curve): E and the flow stress at 2e-3, 5e-3, 2e-2 have
+    an SE and the mean square of their standardised errors is within [0.5, 2], which the same
+    SEs scaled by sqrt(3) either way fail; the reported 95 % intervals of E, sigma_Y, K, n
+    (Fisher, or the profile likelihood where the Fisher SE is above 5 %) cover at least 80 %.
+    Sandwich (vs the population value, t on 2 dof): at least 80 % of its nominal 95 %
+    intervals cover.  Every fit converged."""
     determined = ("E", *(f"flow@{eps:g}" for eps in coverage.ROM_STRAINS))
-    assert len({r["seed"] for r in rows}) == len(ROM_SEEDS)
+    assert len({r["seed"] for r in rows}) == len(seeds)
     assert all(r["converged"] for r in rows)
     assert fisher_check(rows, quantities=determined)
     assert not fisher_check(rows, SQRT3, determined)
@@ -105,3 +96,16 @@ def test_rom_intervals_cover_their_truth(coarse_cwb_rows):
     assert np.mean([r["covered"] for r in reported]) >= 0.8
     sandwich = [r["covered"] for r in rows if r["kind"] == "sandwich"]
     assert None not in sandwich and np.mean(sandwich) >= 0.8
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "known defect (bench/RESULTS.md, 'Interval coverage of the ROM stage'): on the coarse-taped "
+    "CWB, whose curve bends gradually into yield, eq. 13's linear window grows under load-cell "
+    "noise into the onset of yield, so E comes out ~2 Fisher SEs below its noise-free value on "
+    "every seed and sigma_Y, n and the flow stress at 2e-3 compensate upwards; the fix is in the "
+    "estimator (E refined by least squares on every row after the simplex), not in the interval"))
+def test_rom_intervals_of_the_coarse_taped_cwb_cover_their_truth(tmp_path_factory):
+    """The ROM stage on the coarse-taped CWB's twin meets the open tube's criterion (fails
+    today: on seeds 2000-2003 the reported intervals of E, sigma_Y, K, n cover 25 %)."""
+    assert_rom_criterion(rom_rows("cwb19_t2_open_coarse", COARSE_SEEDS, tmp_path_factory), COARSE_SEEDS)

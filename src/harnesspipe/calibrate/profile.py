@@ -27,7 +27,8 @@ unbounded (None).
 The inner minimisation is Gauss-Newton in ln p (central differences: the valleys are
 narrow, a forward-difference direction stalls in them; steps of at most
 MAX_STEP, halved until S decreases; parameters the model refuses count as S = infinity),
-started from the nearest profile point moved along the linear prediction of the others.
+each point started from the others' ln p interpolated (or extrapolated) from the two
+nearest points of the profile already found.
 """
 from __future__ import annotations
 
@@ -43,6 +44,7 @@ SPAN = 3.0              # a profile is searched out to this distance in ln p
 WALK = 0.1              # first profile step in ln p without a Fisher SE (else the SE) ...
 MIN_WALK, MAX_WALK = 0.005, 0.25   # ... within these
 GROWTH = 1.5            # each further step this much longer
+WALK_POINTS = 30        # a side not closed within this many points is reported unbounded
 XTOL = 0.1              # an endpoint to this fraction of the first step (0.1 SE)
 ROOT_STEPS = 8          # Brent steps per endpoint at most
 FAILED = 1e3            # h of a point inside the bracket where the model fails: beyond the end
@@ -75,6 +77,8 @@ class Profile:
         return r if np.all(np.isfinite(r)) else None
 
     def residual_or_raise(self, p: dict) -> np.ndarray:
+        """F_ref - F(p), raising ArithmeticError where the model fails (for the differences
+        of :func:`log_sensitivities`)."""
         r = self.residual(p)
         if r is None:
             raise ArithmeticError(f"the model fails at {p}")
@@ -122,10 +126,10 @@ class Profile:
     def endpoint(self, name: str, side: int, step: float) -> float | None:
         """The value of ``name`` at the interval's end on ``side`` (+1 up, -1 down), or None
         where the profile stays below the threshold out to SPAN in ln p or the model fails
-        on the way.  The profile is walked out in steps of ``step`` in ln p, each GROWTH
-        times longer than the last but moving no other parameter by more than MAX_STEP along
-        the valley, until h > 0; the root of h between the last two points by Brent's
-        method.  Each point starts from the others' ln p interpolated (or extrapolated)
+        on the way or within WALK_POINTS points.  The profile is walked out in steps of
+        ``step`` in ln p, each GROWTH times longer than the last but moving no other parameter
+        by more than MAX_STEP along the valley (and at least MIN_WALK), until h > 0; the root
+        of h between the last two points by Brent's method.  Each point starts from the others' ln p interpolated (or extrapolated)
         from the two nearest points walked (at first: along the fit's valley direction)."""
         x_hat = np.log(self.params[name])
         others = [k for k in self.fitted if k != name]
@@ -156,10 +160,11 @@ class Profile:
         xtol = XTOL * step
         lo, t, h_t = 0.0, 0.0, known[0.0]
         while h_t < 0.0:
-            if t >= SPAN:
+            if t >= SPAN or len(known) > WALK_POINTS:
                 return None
             steepest = np.abs(valley(t)[1]).max(initial=0.0)
-            lo, t = t, min(t + min(step, MAX_STEP / max(steepest, 1e-12)), SPAN)
+            move = max(MIN_WALK, min(step, MAX_STEP / max(steepest, 1e-12)))
+            lo, t = t, min(t + move, SPAN)
             step *= GROWTH
             h_t = h(t)
         if not np.isfinite(h_t):
