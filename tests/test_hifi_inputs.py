@@ -103,3 +103,16 @@ def test_corrugation_pitch_is_a_set_key_of_the_tubes():
         inputs(cfg, "cwb19_t2_open_halflap", {"open_tube.pitch": "0"})
     with pytest.raises(ConfigError, match="fabric_tube.pitch: unknown parameter"):
         inputs(cfg, "cwb19_t2_fabric", {"fabric_tube.pitch": "3"})
+
+
+def test_a_run_stopped_before_its_quasi_static_check_is_refused_up_front():
+    """``--set stop_deflection`` below a third of the stroke would end the run before its
+    KE/IE check starts: refused with the smallest valid stop named, before anything runs;
+    0 (the whole stroke) and a stop at the check's start are accepted."""
+    cfg = load()
+    stroke = cfg["three_point"]["deflection"]
+    with pytest.raises(ConfigError, match=rf"stop_deflection=8: expected 0 \(the whole stroke\) "
+                                          rf"or a deflection of at least {stroke / 3:g} mm"):
+        inputs(cfg, "cwb19_t2_closed", {"stop_deflection": "8"})
+    for ok in ("0", f"{stroke / 3:g}", str(STOP_MM)):
+        assert inputs(cfg, "cwb19_t2_closed", {"stop_deflection": ok}).explicit["stop_deflection"] == float(ok)

@@ -84,6 +84,16 @@ def deflection_problem(deflection: float, span: float) -> str | None:
     return None
 
 
+def stop_problem(stop: float, stroke: float, checked_from: float) -> str | None:
+    """A run stopped early must still reach the part of the stroke where its quasi-static
+    check starts (``checked_from`` of the stroke, KE/IE past it): 0 runs the whole stroke."""
+    if 0.0 < stop < checked_from * stroke:
+        return (f"expected 0 (the whole stroke) or a deflection of at least "
+                f"{checked_from * stroke:g} mm ({checked_from:.0%} of the {stroke:g} mm stroke, "
+                "where the quasi-static KE/IE check starts)")
+    return None
+
+
 def force_sign_problem(force, column: str = "force_N") -> str | None:
     """A test's force resists the imposed displacement and is positive; a curve whose force
     is mostly negative has the load cell's sign flipped."""

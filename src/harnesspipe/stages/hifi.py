@@ -14,7 +14,7 @@ from pathlib import Path
 import pandas as pd
 
 from harnesspipe.config import ConfigError
-from harnesspipe.validate import check, interface_problem, problem
+from harnesspipe.validate import check, interface_problem, problem, stop_problem
 
 #: keys of ``--set`` and their place: interface/explicit parameters, resolution, coverings
 INTERFACE_KEYS = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1", "mu_s",
@@ -103,6 +103,11 @@ def parameters(cfg: dict, overrides: dict, table2: Path | None = None,
                                      *(f"{c}.E|sigma_y|K|n" for c in COVERINGS),
                                      *(f"{c}.pitch" for c in TUBES)])
             raise ConfigError(f"--set {key}: unknown parameter (one of {', '.join(allowed)})")
+    from harnesspipe.models.hifi_bundle import KE_IE_FROM
+    stop = stop_problem(p["explicit"].get("stop_deflection", 0.0),
+                        cfg["three_point"]["deflection"], KE_IE_FROM)
+    if stop:
+        raise ConfigError(f"stop_deflection={p['explicit']['stop_deflection']:g}: {stop}")
     relation = interface_problem(p["interface"])
     if relation and (interface or overrides.keys() & {"delta0", "delta_f"}):
         source = "--set " if overrides.keys() & {"delta0", "delta_f"} else "interface: "
