@@ -6,15 +6,15 @@ Replaces the section "## Hi-fi sensitivity screen" of bench/RESULTS.md.
 
 For each calibration case of the chain (Sec. 4.2: the closed and the half-lap CWB for the
 friction and cohesive steps, the t2 fabric CWB for E2/E1) and each input, one virtual test
-with the input moved by STEP (relative; the build state's ``wire_fill`` by an absolute step,
-its default being 0) against the base run at the config's start values and the paper's
+with the input moved by STEP (relative; the build state's ``wire_fill`` and ``tape_tension``
+by an absolute step, their defaults being 0) against the base run at the config's start values and the paper's
 Table 2.  The normalised sensitivity of a window is
 
     S = (||F' - F|| / ||F||) / (dp / p)     (l2 over the measured grid inside the window)
 
 so S = 1 means a 1 % change of the input moves the window's curve by 1 %; for ``wire_fill``
-the denominator is the absolute step.  Inputs that cannot act on a case (E2/E1 on a tube)
-are not run.  Each run is one Numba thread; two run side by side.
+and ``tape_tension`` the denominator is the absolute step (per unit fill, per N).  Inputs
+that cannot act on a case (E2/E1 on a tube) are not run.  Each run is one Numba thread; two run side by side.
 """
 from __future__ import annotations
 
@@ -28,17 +28,17 @@ from benchlib import write_section
 
 HEADING = "## Hi-fi sensitivity screen"
 STEP = 0.25                    # relative step of an interface input
-ABSOLUTE = {"wire_fill": 0.5}  # inputs whose default is 0: absolute step
+ABSOLUTE = {"wire_fill": 0.5, "tape_tension": 2.0}  # defaults 0: absolute steps (fill, N)
 CASES = {                      # calibration case -> (its windows, the inputs that can act on it)
     "cwb19_t2_closed": (("friction_window", "cohesive_window"),
-                        ("end_tape_layers", "wire_fill", "mu_rtb", "mu_rtp", "delta0", "delta_f",
-                         "alpha_d")),
+                        ("end_tape_layers", "wire_fill", "tape_tension", "mu_rtb", "mu_rtp",
+                         "delta0", "delta_f", "alpha_d")),
     "cwb19_t2_open_halflap": (("friction_window", "cohesive_window"),
-                              ("end_tape_layers", "wire_fill", "mu_rtb", "mu_rtp", "delta0",
-                               "delta_f", "alpha_d")),
+                              ("end_tape_layers", "wire_fill", "tape_tension", "mu_rtb", "mu_rtp",
+                               "delta0", "delta_f", "alpha_d")),
     "cwb19_t2_fabric": (("fabric_window",),
-                        ("end_tape_layers", "wire_fill", "mu_rtb", "mu_rtp", "delta0", "delta_f",
-                         "alpha_d", "E2_over_E1")),
+                        ("end_tape_layers", "wire_fill", "tape_tension", "mu_rtb", "mu_rtp",
+                         "delta0", "delta_f", "alpha_d", "E2_over_E1")),
 }
 
 
@@ -99,7 +99,7 @@ def main() -> None:
 `bench/bench_sensitivity.py --profile {args.profile}`: each input the chain could fit moved by
 +{100 * STEP:.0f} % ({step}) from the config's start values, the paper's Table 2 coverings; S
 = relative l2 change of the curve in the window / relative change of the input (absolute for
-wire_fill: per unit fill).  S below ~0.05 means the window's curve barely sees the input.
+wire_fill, per unit fill, and tape_tension, per N).  S below ~0.05 means the window's curve barely sees the input.
 
 | case | input | S per window |
 |---|---|---|

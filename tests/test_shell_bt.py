@@ -163,14 +163,17 @@ def uniaxial_closed_form(eps, E, nu, sy, K, n):
 
 
 def central_difference(X, conn, th, mat, rho, fixed, load, n_steps, dt, presc=None, alpha=0.0,
-                       v0=None, record=None, hg=bt.HOURGLASS_COEF):
+                       v0=None, record=None, hg=bt.HOURGLASS_COEF, axes=None, sigma_1=0.0):
     """Minimal central-difference loop: ``fixed`` (n, 6) bool, ``presc(t)`` -> (dofs mask,
     velocities) for prescribed velocities, ``load(t)`` external force (n, 6), mass-
-    proportional damping ``alpha``.  ``record(step, x, f_int, state)`` is called each step."""
+    proportional damping ``alpha``, material axes ``axes`` (n_el, 3), a prestress
+    ``sigma_1`` along them.  ``record(step, x, f_int, state)`` is called each step."""
     n = X.shape[0]
     m = np.zeros((n, 6))
     bt.shell_lumped_mass(X, conn, th, rho, m)
-    st = bt.init_shell_state(X, conn, th)
+    st = bt.init_shell_state(X, conn, th, axes)
+    if sigma_1:
+        bt.prestress(st, np.arange(conn.shape[0]), mat, sigma_1)
     x = X.copy()
     v = np.zeros((n, 6)) if v0 is None else v0.copy()
     f_el = np.zeros((conn.shape[0], 4, 6))
@@ -444,3 +447,70 @@ def test_stable_step_explicit_free_vibration(n, factor, stable):
         assert len(peak) == n_steps and max(peak) < 5e-3 * n_steps * factor * dt_est
     else:
         assert len(peak) < n_steps
+
+
+def ring(n_circ, n_ax, R, length):
+    """A cylinder of radius R about x: n_ax x n_circ quads, the hoop (tangent) as axis 1."""
+    phi = np.linspace(0.0, 2.0 * np.pi, n_circ, endpoint=False)
+    xs = np.linspace(0.0, length, n_ax + 1)
+    X = np.array([[x, R * np.cos(p), R * np.sin(p)] for x in xs for p in phi])
+    conn = np.array([[j * n_circ + i, j * n_circ + (i + 1) % n_circ,
+                      (j + 1) * n_circ + (i + 1) % n_circ, (j + 1) * n_circ + i]
+                     for j in range(n_ax) for i in range(n_circ)], dtype=np.int64)
+    mid = 0.5 * (phi + np.roll(phi, -1) + 2.0 * np.pi * (np.arange(n_circ) == n_circ - 1))
+    hoop = np.column_stack([np.zeros(n_circ), -np.sin(mid), np.cos(mid)])
+    return X, conn, np.tile(hoop, (n_ax, 1))
+
+
+def test_prestressed_tape_ring_presses_by_laplace_law():
+    """A tape band wrapped at hoop stress sigma_1 (a J2 ring of 24 facets, prestress along
+    the hoop) pulls each node of a mid ring of nodes radially inward by the facets' hoop
+    force 2 N sin(pi / n), N = sigma_1 h dx: the pressure sigma_1 h / R of Laplace's law on a
+    polygon, h = t exp(-nu sigma_1 / E) the wrapped tape's thickness (t its natural one);
+    no axial force, none tangential, at rest."""
+    R, t, L, n_circ, n_ax, sigma_1 = 7.1, 0.1, 12.0, 24, 4, 1.5
+    X, conn, hoop = ring(n_circ, n_ax, R, L)
+    mat = j2(conn.shape[0], E=119.0, nu=0.4, sy=2.4, K=16.3, n=0.73)
+    th = np.full(conn.shape[0], t)
+    st = bt.init_shell_state(X, conn, th, hoop)
+    bt.prestress(st, np.arange(conn.shape[0]), mat, sigma_1)
+    f = forces(X, np.zeros((X.shape[0], 6)), conn, th, mat, st, 1e-9)
+    mid = np.arange(2 * n_circ, 3 * n_circ)                  # an interior ring of nodes
+    radial = np.einsum("ij,ij->i", f[mid, 1:3], X[mid, 1:3] / R)
+    h = t * np.exp(-0.4 * sigma_1 / 119.0)
+    expected = 2.0 * sigma_1 * h * (L / n_ax) * np.sin(np.pi / n_circ)
+    np.testing.assert_allclose(radial, expected, rtol=1e-6)   # f_int: inward pull = +radial
+    assert np.abs(f[mid, 0]).max() < 1e-9 * expected
+    tangential = f[mid, 1] * -X[mid, 2] / R + f[mid, 2] * X[mid, 1] / R
+    assert np.abs(tangential).max() < 1e-9 * expected
+    with pytest.raises(ValueError, match="below their yield stress"):
+        bt.prestress(st, np.arange(conn.shape[0]), mat, 2.4)
+
+
+def test_prestressed_strip_relaxes_to_its_natural_length():
+    """A free tape strip prestressed along its length (eigenstrain sigma_1 / E, -nu sigma_1 / E)
+    contracts, with damping, to its natural size: length L exp(-sigma_1 / E), width
+    w exp(nu sigma_1 / E), stress-free; its internal work ends at minus the stored elastic
+    energy sigma_1^2 / (2 E) V, the kinetic energy damped out.  (The rate form sums d dt
+    over the strip's damped oscillations, which drifts from the log strain by ~1e-4: the
+    sizes are checked to 5e-4, 3 % of the 1.7 % contraction.)"""
+    E, nu, sigma_1, L0, w0, h0 = 119.0, 0.4, 2.0, 20.0, 4.0, 0.1
+    X, conn = mesh(10, 2, L0, w0)
+    n_el = conn.shape[0]
+    mat, th, rho = j2(n_el, E, nu, 2.4, 16.3, 0.73), np.full(n_el, h0), np.full(n_el, RHO)
+    fixed = np.zeros((X.shape[0], 6), bool)
+    fixed[:, 2:] = True
+    centre = np.argmin(np.linalg.norm(X[:, :2] - [0.5 * L0, 0.5 * w0], axis=1))
+    fixed[centre, :2] = True                          # rigid motion only
+    fixed[np.abs(X[:, 1] - X[centre, 1]) < 1e-9, 1] = True
+    dt = 0.9 * bt.shell_stable_step(X, conn, th, mat, rho)
+    period = 2.0 * L0 / np.sqrt(E / RHO)
+    x, v, f, st = central_difference(X, conn, th, mat, rho, fixed, lambda t: 0.0,
+                                     int(40 * period / dt), dt, alpha=2.0 / period,
+                                     axes=np.tile([1.0, 0.0, 0.0], (n_el, 1)), sigma_1=sigma_1)
+    e11 = sigma_1 / E
+    assert x[:, 0].max() - x[:, 0].min() == pytest.approx(L0 * np.exp(-e11), rel=5e-4)
+    assert x[:, 1].max() - x[:, 1].min() == pytest.approx(w0 * np.exp(nu * e11), rel=5e-4)
+    assert np.abs(st[:, bt.PT_SIG:bt.PT_SIG + 3]).max() < 1e-3 * sigma_1
+    wi, *_ = bt.shell_energies(st)
+    assert wi == pytest.approx(-0.5 * sigma_1 ** 2 / E * L0 * w0 * h0, rel=0.02)

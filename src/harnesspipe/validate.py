@@ -39,6 +39,7 @@ RULES = {
     "tie_damping": ("a fraction of critical damping", 0.0, True, 1.0, False),
     "wire_fill": ("a fraction", 0.0, True, 1.0, False),
     "end_tape_layers": ("a number of wraps of tape", 1.0, True, 10.0, False),
+    "tape_tension": ("a wrapping tension [N]", 0.0, True, None, False),
     "pitch": ("a corrugation pitch [mm]", 0.0, False, None, False),
 }
 
@@ -91,6 +92,15 @@ def stop_problem(stop: float, stroke: float, checked_from: float) -> str | None:
         return (f"expected 0 (the whole stroke) or a deflection of at least "
                 f"{checked_from * stroke:g} mm ({checked_from:.0%} of the {stroke:g} mm stroke, "
                 "where the quasi-static KE/IE check starts)")
+    return None
+
+
+def tape_tension_problem(tension: float, tape: dict) -> str | None:
+    """A tape is wrapped below its yield force ``sigma_y w t`` (a prestress within the
+    elastic range, :func:`harnesspipe.fe.elements.shell_bt.prestress`)."""
+    limit = tape["sigma_y"] * tape["width"] * tape["thickness"]
+    if not tension < limit:
+        return f"expected a wrapping tension below the tape's yield force sigma_y w t = {limit:.3g} N"
     return None
 
 

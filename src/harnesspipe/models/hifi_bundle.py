@@ -27,8 +27,8 @@ from harnesspipe.fe.contact.node_facet import near_node_facet_pairs, node_facet_
 from harnesspipe.fe.contact.search import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
                                            quad_aabbs, segment_aabbs)
 from harnesspipe.fe.contact.wire_wire import WW_POINTS
-from harnesspipe.fe.elements.shell_bt import (HOURGLASS_COEF, init_shell_state, shell_energies,
-                                              shell_lumped_mass, wave_speeds2)
+from harnesspipe.fe.elements.shell_bt import (HOURGLASS_COEF, init_shell_state, prestress,
+                                              shell_energies, shell_lumped_mass, wave_speeds2)
 from harnesspipe.fe.materials.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
 from harnesspipe.models import hifi_mesh as hm
@@ -172,6 +172,7 @@ class BundleSystem(BundleTies):
         self.smat, self.sthick, self.srho = self._shell_materials()    # (empty without shells)
         self.sstate = init_shell_state(mesh.X, self.sconn, self.sthick,
                                        np.asarray(mesh.shell_axis, dtype=float).reshape(-1, 3))
+        self._wrap_tension()
         self.s_el = np.zeros((self.sconn.shape[0], 4, 6))
         self.free = np.ones((n, 6), dtype=np.bool_)
         self.c_damp = float(ex["mass_damping"])
@@ -338,6 +339,17 @@ class BundleSystem(BundleTies):
             if pen.max() < 1e-9:
                 return
             fs["r"] = np.maximum(fs["r"] - pen - 1e-3, 0.0)
+
+    def _wrap_tension(self):
+        """The tape as wrapped under the tension T (config ``hifi.build.tape_tension``, N):
+        every tape element prestressed by T / (w t) along the tape (its material axis, the
+        end bands' hoop and the strips' length; each wrap of an end band carries it)."""
+        T = float(self.inp.config["hifi"]["build"].get("tape_tension", 0.0))
+        tape = np.flatnonzero(self.mesh.shell_part == hm.PART_TAPE)
+        if T == 0.0 or tape.size == 0:
+            return
+        props = tape_material(self.inp.config, self.inp.case)
+        prestress(self.sstate, tape, self.smat, T / (props["width"] * props["thickness"]))
 
     def stable_step(self) -> float:
         """2 / omega_max with a nodal bound of omega_max^2 (Gershgorin, row by row): at each

@@ -14,14 +14,15 @@ from pathlib import Path
 import pandas as pd
 
 from harnesspipe.config import ConfigError
-from harnesspipe.validate import check, interface_problem, problem, stop_problem
+from harnesspipe.validate import (check, interface_problem, problem, stop_problem,
+                                  tape_tension_problem)
 
 #: keys of ``--set`` and their place: interface/explicit parameters, resolution, coverings
 INTERFACE_KEYS = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1", "mu_s",
                   "mu_k", "d_c", "K_nn", "K_ss", "K_tt")
 EXPLICIT_KEYS = ("t_total", "f_m", "safety", "mass_damping", "penalty", "penalty_layers",
                  "search_margin", "tie_damping", "stop_deflection")
-BUILD_KEYS = ("wire_fill", "end_tape_layers")    # the specimen's build state (config hifi.build)
+BUILD_KEYS = ("wire_fill", "end_tape_layers", "tape_tension")    # the specimen's build state (config hifi.build)
 COVERINGS = ("closed_tube", "open_tube", "fabric_tube")
 TUBES = ("closed_tube", "open_tube")             # their corrugation pitch is a --set key too
 
@@ -148,9 +149,14 @@ def inputs(cfg: dict, case: str, overrides: dict, table2: Path | None = None,
     """The :class:`harnesspipe.models.hifi_bundle.HifiInputs` of one run from the config
     (``interface``, ``overrides``, ``covering_values``: see :func:`parameters`)."""
     from harnesspipe.models.hifi_bundle import HifiInputs
+    from harnesspipe.models.hifi_mesh_parts import tape_material
     p = parameters(cfg, overrides, table2, interface, covering_values)
     res = p["resolution"]
     definition = case_definition(cfg, case)
+    tension = p["build"].get("tape_tension", 0.0)
+    bad = tape_tension_problem(tension, tape_material(cfg, definition))
+    if bad:
+        raise ConfigError(f"tape_tension={tension:g}: {bad}")
     t_total = p["explicit"].get("t_total", res["t_total"] * definition.get("t_total_scale", 1.0))
     explicit = {**p["explicit"], "t_total": float(t_total)}
     cfg = {**cfg, "hifi": {**cfg["hifi"], "build": p["build"]},      # --set build keys
