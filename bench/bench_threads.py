@@ -36,8 +36,11 @@ from benchlib import BY_HAND, section_tail, write_section
 HEADING = "## Hi-fi threads on a busy machine"
 CASE = "cwb19_t2_closed"
 LAYERS = {"workqueue": {"NUMBA_THREADING_LAYER": "workqueue"},
-          "omp": {"NUMBA_THREADING_LAYER": "omp"},
-          "omp, passive wait": {"NUMBA_THREADING_LAYER": "omp", "OMP_WAIT_POLICY": "passive"}}
+          "omp": {"NUMBA_THREADING_LAYER": "omp", "GOMP_SPINCOUNT": "300000"},   # libgomp's own default
+          "omp, passive wait": {"NUMBA_THREADING_LAYER": "omp", "OMP_WAIT_POLICY": "passive"},
+          "omp, spin 10k": {"NUMBA_THREADING_LAYER": "omp", "GOMP_SPINCOUNT": "10000"},
+          "harnesspipe's default": {}}     # nothing set: the package's own choice
+VARIANT_KEYS = ("NUMBA_THREADING_LAYER", "OMP_WAIT_POLICY", "GOMP_SPINCOUNT")
 NEIGHBOURS = ("none", "busy", "twin")
 SPIN = "while True: pass"
 
@@ -52,7 +55,8 @@ def start_run(folder: Path, tag: str, threads: int, env: dict, stop: float) -> t
     cmd = [harnesspipe(), "hifi", "three-point", "--case", CASE, "--profile", "quick",
            "--interface", "paper", "--set", f"stop_deflection={stop:g}",
            "--threads", str(threads), "--out", str(out), "--summary", str(summary)]
-    proc = subprocess.Popen(cmd, env={**os.environ, **env}, stdout=subprocess.DEVNULL,
+    own = {k: v for k, v in os.environ.items() if k not in VARIANT_KEYS}   # the variant's alone
+    proc = subprocess.Popen(cmd, env={**own, **env}, stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
     return proc, summary
 
@@ -87,6 +91,8 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--stop", type=float, default=12.0, help="stop_deflection of each run, mm")
     ap.add_argument("--no-write", action="store_true", help="print only")
+    ap.add_argument("--layers", nargs="*", default=list(LAYERS), choices=list(LAYERS),
+                    help="the layer variants to measure (default: all)")
     args = ap.parse_args()
 
     t0 = time.perf_counter()
@@ -95,35 +101,40 @@ def main() -> None:
     warm = time.perf_counter() - t0
 
     rows = []
-    for layer, env in LAYERS.items():
+    for layer in args.layers:
         for threads in (1, 2):
             for neighbour in NEIGHBOURS:
-                walls = [measure(env, threads, neighbour, args.stop) for _ in range(args.repeats)]
-                rows.append((layer, threads, neighbour, statistics.median(walls)))
-                print(f"{layer:18s} threads {threads} beside {neighbour:5s}: "
-                      f"median {rows[-1][3]:7.2f} s  ({', '.join(f'{w:.2f}' for w in walls)})",
+                walls = [measure(LAYERS[layer], threads, neighbour, args.stop)
+                         for _ in range(args.repeats)]
+                rows.append((layer, threads, neighbour, walls))
+                print(f"{layer:18s} threads {threads} beside {neighbour:5s}: median "
+                      f"{statistics.median(walls):7.2f} s  ({', '.join(f'{w:.2f}' for w in walls)})",
                       flush=True)
     if not args.no_write:
         write_section(HEADING, report(rows, warm, args))
 
 
 def report(rows: list, warm: float, args) -> str:
-    base = {(l, t): w for l, t, n, w in rows if n == "none"}
-    ref = base[("workqueue", 2)]
+    """The section: one row per (layer, threads, neighbour), median, range and ratios."""
+    median = {(l, t, n): statistics.median(w) for l, t, n, w in rows}
+    ref = min(m for (l, t, n), m in median.items() if n == "none")
     lines = [HEADING, "",
              f"`bench/bench_threads.py` on {platform.machine()}, {os.cpu_count()} cores, "
              f"{time.strftime('%Y-%m-%d')}: the {CASE} quick-profile run to "
-             f"{args.stop:g} mm (the paper's interface), median of {args.repeats} runs' "
-             f"integration wall time, Numba cache warm (first run, cache load or compile "
-             f"included, whole process: {warm:.1f} s).  'slowdown' is against the same layer "
-             f"and thread count alone; 'vs 2 alone' against workqueue with 2 threads on an idle "
-             f"machine ({ref:.2f} s).  A twin is the same run started beside it (the figure is "
-             f"the two runs' mean).", "",
-             "| threading layer | threads | beside | wall s | slowdown | vs 2 alone |",
+             f"{args.stop:g} mm (the paper's interface), {args.repeats} runs each: their "
+             f"integration wall time (median, and the range: a stalled run shows there), "
+             f"Numba cache warm (the first run, cache load or compile included, whole "
+             f"process: {warm:.1f} s).  'slowdown': the median against the same layer and "
+             f"thread count alone; 'vs best idle': against the fastest idle median "
+             f"({ref:.2f} s).  A twin is the same run started beside it (the figure is the "
+             f"two runs' mean).", "",
+             "| threading layer | threads | beside | wall s, median (range) | slowdown | vs best idle |",
              "|---|---|---|---|---|---|"]
-    for layer, threads, neighbour, wall in rows:
-        lines.append(f"| {layer} | {threads} | {neighbour} | {wall:.2f} | "
-                     f"{wall / base[(layer, threads)]:.2f} | {wall / ref:.2f} |")
+    for layer, threads, neighbour, walls in rows:
+        m = median[(layer, threads, neighbour)]
+        lines.append(f"| {layer} | {threads} | {neighbour} | {m:.2f} ({min(walls):.2f}-"
+                     f"{max(walls):.2f}) | {m / median[(layer, threads, 'none')]:.2f} | "
+                     f"{m / ref:.2f} |")
     tail = section_tail(HEADING)
     return "\n".join(lines) + "\n\n" + (tail or BY_HAND + "\n\n(none yet)") + "\n"
 

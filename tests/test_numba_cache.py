@@ -57,3 +57,19 @@ def test_all_kernels_live_in_fe():
                  if "fe" not in p.relative_to(pkg).parts[:1]
                  and re.search(r"^\s*@(numba\.)?(njit|jit|vectorize|guvectorize)", p.read_text(), re.M)]
     assert offenders == []
+
+
+def test_openmp_threads_sleep_when_idle_unless_the_user_says_otherwise():
+    """Importing harnesspipe makes OpenMP's waiting threads sleep (OMP_WAIT_POLICY=passive:
+    spinning threads stalled a two-thread hi-fi run 3.4x beside another busy process,
+    bench/RESULTS.md) when the user has set neither OMP_WAIT_POLICY nor GOMP_SPINCOUNT;
+    a user's own setting is kept."""
+    import os
+    probe = "import os, harnesspipe; print(os.environ.get('OMP_WAIT_POLICY'))"
+    base = {k: v for k, v in os.environ.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
+    cases = [({}, "passive"), ({"OMP_WAIT_POLICY": "active"}, "active"),
+             ({"GOMP_SPINCOUNT": "300000"}, "None")]
+    for extra, expected in cases:
+        out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                             check=True, env={**base, **extra})
+        assert out.stdout.strip() == expected, extra

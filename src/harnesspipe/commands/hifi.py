@@ -37,7 +37,9 @@ def register(sub) -> None:
     p.add_argument("--summary", type=Path, default=None,
                    help="summary JSON (default: summary.json in the --outdir folder)")
     p.add_argument("--threads", type=int, default=None,
-                   help="Numba threads (default: all cores; Snakemake passes its `threads`)")
+                   help="Numba threads (default: all cores, which sleep when idle, so another "
+                        "job on the machine does not stall them: OMP_WAIT_POLICY=passive unless "
+                        "set; Snakemake passes its `threads`)")
     p.add_argument("--outdir", type=Path, default=None,
                    help="folder for energies, slip-out, shapes (default: OUT_files beside --out)")
     p.set_defaults(func=_three_point)
@@ -51,7 +53,8 @@ def register(sub) -> None:
     p.add_argument("--config", type=Path, default=None, help="config file (default: the package's)")
     p.add_argument("--coverings", type=Path, default=None,
                    help="table2.csv of the tensile stage (default: config hifi.coverings)")
-    p.add_argument("--threads", type=int, default=None, help="Numba threads (default: all cores)")
+    p.add_argument("--threads", type=int, default=None,
+                   help="Numba threads (default: all cores, sleeping when idle: see three-point)")
     p.add_argument("--out", type=Path, required=True, help="CSV: displacement_mm,force_N")
     p.add_argument("--summary", type=Path, default=None,
                    help="summary JSON (default: summary.json in the --outdir folder)")
