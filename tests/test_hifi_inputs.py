@@ -120,11 +120,13 @@ def test_a_run_stopped_before_its_quasi_static_check_is_refused_up_front():
 
 def test_tape_tension_prestresses_every_tape_element_along_the_tape():
     """``--set tape_tension=T`` (N) wraps the tape at T: every tape element (end bands and
-    the half-lap helix) starts at the stress T / (w t) along its material axis and none
-    across it; the other shells start unstressed.  At or above the tape's yield force
+    the half-lap helix) reaches the stress T / (w t) along its material axis, none across
+    it, raised by the smooth step over the run's first WRAP_FRACTION (half of it at half
+    that time); the other shells stay unstressed.  At or above the tape's yield force
     sigma_y w t the run is refused."""
     from harnesspipe.fe.elements import shell_bt as bt
     from harnesspipe.models import hifi, hifi_mesh as hm
+    from harnesspipe.models.hifi_bundle import WRAP_FRACTION
     cfg = load()
     cfg["profile"] = "quick"
     inp = inputs(cfg, "cwb19_t2_open_halflap", {"tape_tension": "2"})
@@ -133,13 +135,16 @@ def test_tape_tension_prestresses_every_tape_element_along_the_tape():
     sigma_1 = 2.0 / (tape_props["width"] * tape_props["thickness"])
     st, tape = system.sstate, system.mesh.shell_part == hm.PART_TAPE
     assert tape.sum() > 100 and (~tape).sum() > 100
-    c, s = st[:, bt.S_MCOS], st[:, bt.S_MSIN]
-    sx, sy, sxy = (st[:, bt.PT_SIG + i] for i in range(3))
-    along = sx * c * c + sy * s * s + 2.0 * sxy * c * s
-    across = sx * s * s + sy * c * c - 2.0 * sxy * c * s
-    np.testing.assert_allclose(along[tape], sigma_1, rtol=1e-12)
-    assert np.abs(across[tape]).max() < 1e-12 * sigma_1
-    assert not st[~tape, :bt.S_GXZ].any()
+    at_rest = np.zeros_like(system.mass)
+    for level, t in ((0.5, 0.5), (1.0, 1.0), (1.0, 2.0)):      # t in units of the ramp
+        system.forces(t * WRAP_FRACTION * system.T, at_rest, 1e-9)
+        c, s = st[:, bt.S_MCOS], st[:, bt.S_MSIN]
+        sx, sy, sxy = (st[:, bt.PT_SIG + i] for i in range(3))
+        along = sx * c * c + sy * s * s + 2.0 * sxy * c * s
+        across = sx * s * s + sy * c * c - 2.0 * sxy * c * s
+        np.testing.assert_allclose(along[tape], level * sigma_1, rtol=1e-9)
+        assert np.abs(across[tape]).max() < 1e-9 * sigma_1
+        assert not st[~tape, :bt.S_GXZ].any()
     limit = tape_props["sigma_y"] * tape_props["width"] * tape_props["thickness"]
     with pytest.raises(ConfigError, match=rf"tape_tension=5: expected a wrapping tension below "
                                           rf"the tape's yield force sigma_y w t = {limit:.3g} N"):

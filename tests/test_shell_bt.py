@@ -173,7 +173,8 @@ def central_difference(X, conn, th, mat, rho, fixed, load, n_steps, dt, presc=No
     bt.shell_lumped_mass(X, conn, th, rho, m)
     st = bt.init_shell_state(X, conn, th, axes)
     if sigma_1:
-        bt.prestress(st, np.arange(conn.shape[0]), mat, sigma_1)
+        every = np.arange(conn.shape[0])
+        bt.add_prestrain(st, every, *bt.uniaxial_prestrain(mat, every, sigma_1), 1.0)
     x = X.copy()
     v = np.zeros((n, 6)) if v0 is None else v0.copy()
     f_el = np.zeros((conn.shape[0], 4, 6))
@@ -473,7 +474,8 @@ def test_prestressed_tape_ring_presses_by_laplace_law():
     mat = j2(conn.shape[0], E=119.0, nu=0.4, sy=2.4, K=16.3, n=0.73)
     th = np.full(conn.shape[0], t)
     st = bt.init_shell_state(X, conn, th, hoop)
-    bt.prestress(st, np.arange(conn.shape[0]), mat, sigma_1)
+    every = np.arange(conn.shape[0])
+    bt.add_prestrain(st, every, *bt.uniaxial_prestrain(mat, every, sigma_1), 1.0)
     f = forces(X, np.zeros((X.shape[0], 6)), conn, th, mat, st, 1e-9)
     mid = np.arange(2 * n_circ, 3 * n_circ)                  # an interior ring of nodes
     radial = np.einsum("ij,ij->i", f[mid, 1:3], X[mid, 1:3] / R)
@@ -484,7 +486,7 @@ def test_prestressed_tape_ring_presses_by_laplace_law():
     tangential = f[mid, 1] * -X[mid, 2] / R + f[mid, 2] * X[mid, 1] / R
     assert np.abs(tangential).max() < 1e-9 * expected
     with pytest.raises(ValueError, match="below their yield stress"):
-        bt.prestress(st, np.arange(conn.shape[0]), mat, 2.4)
+        bt.uniaxial_prestrain(mat, every, 2.4)
 
 
 def test_prestressed_strip_relaxes_to_its_natural_length():

@@ -27,10 +27,12 @@ from harnesspipe.fe.contact.node_facet import near_node_facet_pairs, node_facet_
 from harnesspipe.fe.contact.search import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
                                            quad_aabbs, segment_aabbs)
 from harnesspipe.fe.contact.wire_wire import WW_POINTS
-from harnesspipe.fe.elements.shell_bt import (HOURGLASS_COEF, init_shell_state, prestress,
-                                              shell_energies, shell_lumped_mass, wave_speeds2)
+from harnesspipe.fe.elements.shell_bt import (HOURGLASS_COEF, add_prestrain, init_shell_state,
+                                              shell_energies, shell_lumped_mass,
+                                              uniaxial_prestrain, wave_speeds2)
 from harnesspipe.fe.materials.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
+from harnesspipe.fe.solvers.central_difference import smooth_step
 from harnesspipe.models import hifi_mesh as hm
 from harnesspipe.models.hifi_mesh_parts import tape_material
 from harnesspipe.models.hifi_parts import Wires
@@ -51,6 +53,7 @@ FACET_SPEC = {"nodes": ((), I8), "r": ((), F8), "quads": ((4,), I8), "t": ((), F
 
 
 KE_IE_FROM = 1.0 / 3.0   # KE/IE is checked once the feeder has passed this part of the stroke
+WRAP_FRACTION = 0.05     # the tape's wrapping tension is raised over this start of a run (the feeder: 0.1 % of its stroke)
 
 
 def quasi_static_ratio(history, stroke: float, start: float = KE_IE_FROM,
@@ -342,14 +345,29 @@ class BundleSystem(BundleTies):
 
     def _wrap_tension(self):
         """The tape as wrapped under the tension T (config ``hifi.build.tape_tension``, N):
-        every tape element prestressed by T / (w t) along the tape (its material axis, the
-        end bands' hoop and the strips' length; each wrap of an end band carries it)."""
+        every tape element is prestressed to T / (w t) along the tape (its material axis,
+        the end bands' hoop and the strips' length; each wrap of an end band carries it),
+        raised smoothly over the first ``WRAP_FRACTION`` of the run (:meth:`_wrap_step`)."""
+        self.wrap = None
         T = float(self.inp.config["hifi"]["build"].get("tape_tension", 0.0))
         tape = np.flatnonzero(self.mesh.shell_part == hm.PART_TAPE)
         if T == 0.0 or tape.size == 0:
             return
         props = tape_material(self.inp.config, self.inp.case)
-        prestress(self.sstate, tape, self.smat, T / (props["width"] * props["thickness"]))
+        e11, e22 = uniaxial_prestrain(self.smat, tape, T / (props["width"] * props["thickness"]))
+        self.wrap = (tape, e11, e22)
+        self.wrap_applied = 0.0
+
+    def _wrap_step(self, t):
+        """Raise the tape's prestrain to S(t / t_wrap) of its full value (S the smooth step,
+        t_wrap = ``WRAP_FRACTION`` T): a sudden prestress would shake the light tape nodes
+        on their ties."""
+        tape, e11, e22 = self.wrap
+        level = smooth_step(t / (WRAP_FRACTION * self.T))[0]
+        add_prestrain(self.sstate, tape, e11, e22, level - self.wrap_applied)
+        self.wrap_applied = level
+        if level >= 1.0:
+            self.wrap = None
 
     def stable_step(self) -> float:
         """2 / omega_max with a nodal bound of omega_max^2 (Gershgorin, row by row): at each
@@ -424,6 +442,8 @@ class BundleSystem(BundleTies):
         clock = time.perf_counter
         F = self.F
         F[...] = 0.0
+        if self.wrap is not None:
+            self._wrap_step(t)
         t0 = clock()
         if self.x_search is None or max_drift2(self.x, self.x_search) > (0.5 * self.margin) ** 2:
             self._search()          # some pair may have closed in by a margin: search anew

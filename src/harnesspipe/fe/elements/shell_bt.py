@@ -185,28 +185,39 @@ def init_shell_state(X, conn, thick, axes_ref=None):
     return state
 
 
-def prestress(state, elements, mat, sigma_1) -> None:
-    """Uniaxial prestress ``sigma_1`` along material axis 1 of the J2 (isotropic, elastic)
-    ``elements`` of ``state``, e.g. a tape wrapped under tension: its natural length is
-    shorter than its mesh, so the total strain starts at the eigenstrain
-    ``(sigma_1 / E, -nu sigma_1 / E, 0)`` of material axes 1, 2 (a uniaxial stress in plane
-    stress) and the stress at ``sigma_1`` along axis 1, both rotated into the element frame
-    (axis 1 at ``(S_MCOS, S_MSIN)``), at every thickness point.  The internal work counts
-    from this state: a prestressed part that relaxes does negative work, which the energy
-    balance of a run sees as the kinetic energy and dissipation it feeds."""
+def uniaxial_prestrain(mat, elements, sigma_1) -> tuple[np.ndarray, np.ndarray]:
+    """The eigenstrain ``(e11, e22) = (sigma_1 / E, -nu sigma_1 / E)`` of material axes 1, 2
+    that holds the J2 (isotropic, elastic) ``elements`` at the uniaxial stress ``sigma_1``
+    along axis 1 (plane-stress Hooke of it is ``(sigma_1, 0, 0)``): a tape wrapped under
+    tension, whose natural length is shorter than its mesh.  ``sigma_1`` must stay below
+    the elements' yield stress (wrapped elastically)."""
     elements = np.asarray(elements, dtype=np.int64)
-    E, nu = mat[elements, 0], mat[elements, 1]
     if np.any(mat[elements, MAT_KIND] != MAT_J2) or np.any(sigma_1 >= mat[elements, 2]):
         raise ValueError(f"prestress {sigma_1:g} MPa: expected J2 elements below their yield stress")
-    c, s = state[elements, S_MCOS], state[elements, S_MSIN]
-    e11, e22 = sigma_1 / E, -nu * sigma_1 / E
-    eps = np.column_stack([e11 * c * c + e22 * s * s, e11 * s * s + e22 * c * c,
-                           2.0 * (e11 - e22) * c * s])
-    sig = sigma_1 * np.column_stack([c * c, s * s, c * s])
-    for k in range(N_THICKNESS):
-        o = k * PT_SIZE
-        state[elements, o + PT_EPS:o + PT_EPS + 3] = eps
-        state[elements, o + PT_SIG:o + PT_SIG + 3] = sig
+    E, nu = mat[elements, 0], mat[elements, 1]
+    return sigma_1 / E, -nu * sigma_1 / E
+
+
+@njit(cache=True)
+def add_prestrain(state, elements, e11, e22, fraction):
+    """Add ``fraction`` of the material-axes strain ``(e11[i], e22[i], 0)`` to the total
+    strain of element ``elements[i]`` at every thickness point, rotated into the element
+    frame (axis 1 at ``(S_MCOS, S_MSIN)``: ``eps_xx = e11 c^2 + e22 s^2``, ``eps_yy = e11
+    s^2 + e22 c^2``, ``gamma_xy = 2 (e11 - e22) c s``).  The next stress update turns it
+    into stress (the total-strain state); raised by fractions over time it is a prestress
+    applied smoothly, at once (``fraction`` 1 before the first step) a sudden one."""
+    for i in range(elements.size):
+        e = elements[i]
+        c, s = state[e, S_MCOS], state[e, S_MSIN]
+        a, b = fraction * e11[i], fraction * e22[i]
+        exx = a * c * c + b * s * s
+        eyy = a * s * s + b * c * c
+        gxy = 2.0 * (a - b) * c * s
+        for k in range(N_THICKNESS):
+            o = k * PT_SIZE + PT_EPS
+            state[e, o] += exx
+            state[e, o + 1] += eyy
+            state[e, o + 2] += gxy
 
 
 @njit(cache=True)
