@@ -47,13 +47,20 @@ def test_chain_roles_and_longest_virtual_test_first():
 
 
 def test_chain_starts_with_the_build_state_and_carries_it():
-    """The build step fits the end bands' wraps from the config's start value within
-    layers_bounds on the whole test; every later step takes it as a prior."""
+    """The build steps fit the end bands' wraps, then the tape's wrapping tension, from the
+    config's start values within layers_bounds and tension_bounds on the whole test of the
+    tube CWBs; every later step takes both as priors."""
     cfg = hp_config.load()
     s = json.loads(chain.fit_settings(cfg, "build", hp_config.resolution(cfg)))
     assert s["names"] == ["end_tape_layers"] and s["method"] == "bounded"
     assert s["start"]["end_tape_layers"] == cfg["hifi"]["build"]["end_tape_layers"]
     assert s["bounds"] == cfg["hifi"]["pipeline"]["layers_bounds"]
     assert s["window"] == cfg["hifi"]["pipeline"]["build_window"]
-    assert list(chain.STEPS)[0] == "build"
-    assert all("build" in step["prior"] for name, step in chain.STEPS.items() if name != "build")
+    t = json.loads(chain.fit_settings(cfg, "tension", hp_config.resolution(cfg)))
+    assert t["names"] == ["tape_tension"] and t["method"] == "bounded"
+    assert t["start"]["tape_tension"] == cfg["hifi"]["build"]["tape_tension"]
+    assert t["bounds"] == cfg["hifi"]["pipeline"]["tension_bounds"] and t["cases"] == s["cases"]
+    assert t["window"] == s["window"]
+    assert list(chain.STEPS)[:2] == ["build", "tension"] and chain.STEPS["tension"]["prior"] == ["build"]
+    assert all({"build", "tension"} <= set(step["prior"]) for name, step in chain.STEPS.items()
+               if name not in ("build", "tension"))

@@ -26,6 +26,7 @@ from harnesspipe.calibrate.uncertainty import Z95
 from harnesspipe.data.synthesize import read_truth
 from harnesspipe.report import links, plots, verdict
 from harnesspipe.report.names import labelled, physical_name, solver_statistics
+from harnesspipe.stages.chain_settings import STEPS
 from harnesspipe.stages.common import read_fit
 from harnesspipe.stages.data import read_prepared
 
@@ -541,7 +542,7 @@ HIFI_INTRO = (
     "<p class='note'>Explicit mesoscale model of the three-point test (Sec. 4.1). "
     "The cross-check runs use the paper's Table 2 and interface values; the calibration chain "
     "fits the interface to the measured means (Sec. 4.2) with the tensile stage's Table 2.</p>")
-CHAIN_ORDER = {"build": 0, "mu_rtb": 1, "mu_rtp": 2, "cohesive": 3, "fabric": 4}   # stages/chain_settings.STEPS
+CHAIN_ORDER = {step: i for i, step in enumerate(STEPS)}     # the chain's order
 RUN_GROUPS = (("virtual", "Virtual tests at the calibrated interface"),   # single runs, in section order
               ("crosscheck", "Cross-check runs at the paper's parameters"),
               ("chain", "Calibration runs at the best points"))
@@ -608,7 +609,8 @@ def _interface_table(root: Path, fits: list[Path], cfg: dict) -> str:
             for k in names]
     src = "results/hifi/interface.csv" if iface.exists() else "chain fits so far (interface.csv not written yet)"
     return (f"<h3>Calibrated interface (Sec. 4.2) and build state</h3><p>From <code>{html.escape(src)}</code>; "
-            "the build state (end_tape_layers: wraps of the end bands) is not in the paper.</p>"
+            "the build state (end_tape_layers: wraps of the end bands; tape_tension: the tape's "
+            "wrapping tension, N) is not in the paper.</p>"
             + _table(["parameter", "calibrated", "initial guess", "paper (Sec. 4.2)", "difference"], rows))
 
 

@@ -2,8 +2,9 @@
 
 The chain in order: each step fixes what the earlier steps fitted (``prior``).  It starts
 with the specimen's build state that the sensitivity screen shows the curves depend on (the
-end bands' wraps, ``build``; bench/RESULTS.md "Hi-fi sensitivity screen"), then the paper's
-steps.  ``cores``:
+end bands' wraps, ``build``, then the tape's wrapping tension, ``tension``: two bounded
+searches in turn, each on the whole test of both tube CWBs; bench/RESULTS.md "Hi-fi
+sensitivity screen"), then the paper's steps.  ``cores``:
 the step's Snakemake threads.  Nothing else of the chain can run beside the friction and
 cohesive fits (every virtual test needs their interface), so they take both cores (one process
 per case, or one process with two Numba threads); the fabric fit takes one, and the virtual
@@ -21,23 +22,27 @@ STEPS = {
     "build": {"names": ["end_tape_layers"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
               "window": "build_window", "method": "bounded", "bounds": "layers_bounds",
               "prior": [], "cores": 2},
+    "tension": {"names": ["tape_tension"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
+                "window": "build_window", "method": "bounded", "bounds": "tension_bounds",
+                "prior": ["build"], "cores": 2},
     "mu_rtb": {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": "friction_window",
-               "method": "bounded", "bounds": "mu_bounds", "prior": ["build"], "cores": 2},
+               "method": "bounded", "bounds": "mu_bounds", "prior": ["build", "tension"],
+               "cores": 2},
     "mu_rtp": {"names": ["mu_rtp"], "cases": ["cwb19_t2_open_halflap"],
                "window": "friction_window", "method": "bounded", "bounds": "mu_bounds",
-               "prior": ["build", "mu_rtb"], "cores": 2},
+               "prior": ["build", "tension", "mu_rtb"], "cores": 2},
     "cohesive": {"names": ["delta0", "delta_f", "alpha_d"],
                  "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"], "window": "cohesive_window",
-                 "method": "simplex", "prior": ["build", "mu_rtb", "mu_rtp"], "cores": 2},
+                 "method": "simplex", "prior": ["build", "tension", "mu_rtb", "mu_rtp"], "cores": 2},
     "fabric": {"names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": "fabric_window",
                "method": "bounded", "bounds": "E2_bounds",
-               "prior": ["build", "mu_rtb", "mu_rtp", "cohesive"], "cores": 1},
+               "prior": ["build", "tension", "mu_rtb", "mu_rtp", "cohesive"], "cores": 1},
 }
 VALIDATION = ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric")   # Sec. 4.2: predicted, no refit
 CALIBRATED = sorted({c for s in STEPS.values() for c in s["cases"]})
-BUILD = ("end_tape_layers",)      # build-state inputs the chain fits (config hifi.build)
+BUILD = ("end_tape_layers", "tape_tension")   # build-state inputs the chain fits (config hifi.build)
 WINDOWS = ("build_window", "friction_window", "cohesive_window", "fabric_window",
-           "layers_bounds", "mu_bounds", "E2_bounds")
+           "layers_bounds", "tension_bounds", "mu_bounds", "E2_bounds")
 
 
 def check_windows(config: dict) -> None:

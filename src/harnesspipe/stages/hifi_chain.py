@@ -43,10 +43,10 @@ from harnesspipe.calibrate import hifi as hcal
 from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
 from harnesspipe.calibrate.simplex import evaluate_logged
 from harnesspipe.config import ConfigError
+from harnesspipe.stages.chain_settings import BUILD   # build-state inputs a chain step may fit
 from harnesspipe.stages.common import read_fit, write_csv, write_fit, write_json
 
 INTERFACE = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1")
-BUILD = ("end_tape_layers",)   # build-state inputs a chain step may fit (config hifi.build)
 #: interface values a run needs but a case does not use: E2/E1 acts on fabric coverings only
 NEUTRAL = {"E2_over_E1": 1.0}
 N_GRID = 101   # points of the deflection grid a hi-fi curve is resampled to for eq. 13 (as prepare_test)
