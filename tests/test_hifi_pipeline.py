@@ -22,6 +22,7 @@ import pytest
 from conftest import copy_project, job_stats
 from harnesspipe.calibrate import hifi as hcal
 from harnesspipe.stages import hifi_chain
+from harnesspipe.stages.chain_settings import STEPS
 
 # --------------------------------------------------------------------------- the stand-in model
 
@@ -678,8 +679,8 @@ def test_branch_properties_from_hifi_virtual_tests(project):
 
 
 @pytest.mark.parametrize("in_all, reference, expected", [
-    ("[chain]", "hifi", {"hifi_fit": 5, "hifi_virtual": 9}),
-    ("[chain, crosscheck]", "hifi", {"hifi_fit": 5, "hifi_virtual": 9, "hifi_crosscheck": 5}),
+    ("[chain]", "hifi", {"hifi_fit": len(STEPS), "hifi_virtual": 9}),
+    ("[chain, crosscheck]", "hifi", {"hifi_fit": len(STEPS), "hifi_virtual": 9, "hifi_crosscheck": 5}),
     ("[]", "measured", {}),
 ])
 def test_all_holds_the_hifi_groups_of_in_all(project, in_all, reference, expected):
