@@ -24,7 +24,7 @@ from multiprocessing import Pool
 
 import numpy as np
 
-from benchlib import write_section
+from benchlib import section_tail, write_section
 
 HEADING = "## Hi-fi sensitivity screen"
 STEP = 0.25                    # relative step of an interface input
@@ -104,7 +104,8 @@ wire_fill, per unit fill, and tape_tension, per N).  S below ~0.05 means the win
 | case | input | S per window |
 |---|---|---|
 """ + "\n".join(rows) + "\n"
-    write_section(HEADING, text)
+    tail = section_tail(HEADING)          # the notes by hand stay
+    write_section(HEADING, text + ("\n" + tail + "\n" if tail else ""))
     print(json.dumps(table, indent=1))
 
 
