@@ -53,7 +53,7 @@ FACET_SPEC = {"nodes": ((), I8), "r": ((), F8), "quads": ((4,), I8), "t": ((), F
 
 
 KE_IE_FROM = 1.0 / 3.0   # KE/IE is checked once the feeder has passed this part of the stroke
-WRAP_FRACTION = 0.05     # the tape's wrapping tension is raised over this start of a run (the feeder: 0.1 % of its stroke)
+WRAP_FRACTION = 0.05     # the tape's wrapping tension rises over this start of a run (feeder: 0.1 % of stroke)
 
 
 def quasi_static_ratio(history, stroke: float, start: float = KE_IE_FROM,
