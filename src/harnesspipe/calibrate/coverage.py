@@ -256,8 +256,10 @@ def rom_settings(cfg: dict, case: str, profile: str = "quick", maxfev: int | Non
 def rom_specimens_fit(truth_record: dict, settings: dict, u, iterations: int = 2) -> dict:
     """The Fisher interval's truth for the ROM stage: what its estimator finds on the mean of
     the specimens' noise-free curves on the rows ``u`` -- E by eq. 13 with the model-consistent
-    factor (:func:`harnesspipe.calibrate.rom.effective_modulus`), then the least-squares
-    (sigma_Y, K, n) at that E, by Gauss-Newton from the specimens' mean parameters."""
+    factor (:func:`harnesspipe.calibrate.rom.effective_modulus`), the least-squares hardening
+    at that E by Gauss-Newton from the specimens' mean parameters, then, with
+    ``consistent_E_model: elastoplastic``, the stage's elastoplastic window from there
+    (:func:`harnesspipe.calibrate.rom.elastoplastic_window`)."""
     from harnesspipe.calibrate import rom as rom_fit
     u = np.asarray(u, dtype=float)
 
@@ -266,8 +268,11 @@ def rom_specimens_fit(truth_record: dict, settings: dict, u, iterations: int = 2
 
     target = np.mean([on_rows(s) for s in truth_record["samples"].values()], axis=0)
     p = {**specimens_mean(truth_record), "E": rom_fit.effective_modulus(u, target, settings)[0]}
-    fitted = [k for k in PARAMETERS if k in settings["rom"]["simplex_parameters"]]
-    return gauss_newton(on_rows, target, p, fitted, iterations)
+    p = gauss_newton(on_rows, target, p, rom_fit.hardening_names(settings["rom"]), iterations)
+    rs = settings["rom"]
+    if rs["model_consistent_E"] and rs["consistent_E_model"] == "elastoplastic":
+        p = rom_fit.elastoplastic_window(u, target, p, settings)[0]
+    return p
 
 
 def rom_seed(cfg: dict, seed: int, cases, work: Path, profile: str = "quick",

@@ -37,6 +37,7 @@ from collections.abc import Callable
 import numpy as np
 from scipy import optimize, stats
 
+from harnesspipe.calibrate import least_squares
 from harnesspipe.calibrate.uncertainty import log_sensitivities
 
 CHI2_95 = float(stats.chi2.ppf(0.95, 1))   # 3.84: the 95 % threshold of the deviance
@@ -48,10 +49,9 @@ WALK_POINTS = 30        # a side not closed within this many points is reported 
 XTOL = 0.1              # an endpoint to this fraction of the first step (0.1 SE)
 ROOT_STEPS = 8          # Brent steps per endpoint at most
 FAILED = 1e3            # h of a point inside the bracket where the model fails: beyond the end
-GN_STEPS = 10           # Gauss-Newton steps per profile point at most
+GN_STEPS = least_squares.STEPS   # Gauss-Newton steps per profile point at most
 CONVERGED = 1e-3        # ... ending when a step lowers S by less than this times s^2
-HALVINGS = 5            # step halvings per Gauss-Newton step at most
-MAX_STEP = 0.5          # a Gauss-Newton step moves no ln p by more than this
+MAX_STEP = least_squares.MAX_STEP   # a Gauss-Newton step moves no ln p by more than this
 
 
 class Profile:
@@ -76,14 +76,6 @@ class Profile:
             return None
         return r if np.all(np.isfinite(r)) else None
 
-    def residual_or_raise(self, p: dict) -> np.ndarray:
-        """F_ref - F(p), raising ArithmeticError where the model fails (for the differences
-        of :func:`log_sensitivities`)."""
-        r = self.residual(p)
-        if r is None:
-            raise ArithmeticError(f"the model fails at {p}")
-        return r
-
     def sum_of_squares(self, p: dict) -> float:
         """S(p), infinite where the model fails or refuses the parameters."""
         r = self.residual(p)
@@ -91,33 +83,11 @@ class Profile:
 
     def minimise(self, name: str, x: float, start: dict) -> tuple[float, dict]:
         """(S_j(x), the parameters there): ln p_name held at x, the other fitted parameters
-        by Gauss-Newton in ln p from ``start``, until a step lowers S by less than
-        CONVERGED s^2."""
+        by Gauss-Newton in ln p from ``start`` (:func:`least_squares.descend`), until a step
+        lowers S by less than CONVERGED s^2."""
         others = [k for k in self.fitted if k != name]
-        p = {**start, name: float(np.exp(x))}
-        r = self.residual(p)
-        if r is None:
-            return np.inf, p
-        S = float(r @ r)
-        for _ in range(GN_STEPS if others else 0):
-            try:
-                J = -log_sensitivities(self.residual_or_raise, p, others)
-            except (RuntimeError, ArithmeticError, ValueError):
-                break
-            step = np.linalg.lstsq(J, r, rcond=None)[0]
-            step *= min(1.0, MAX_STEP / max(np.abs(step).max(), 1e-300))   # a trust region in ln p
-            for halving in range(HALVINGS):
-                trial = {**p, **{k: p[k] * float(np.exp(d * 0.5**halving)) for k, d in zip(others, step)}}
-                r_trial = self.residual(trial)
-                if r_trial is not None and float(r_trial @ r_trial) < S:
-                    break
-            else:
-                break                                  # no decrease along the step: converged
-            S_trial = float(r_trial @ r_trial)
-            decrease, p, r, S = S - S_trial, trial, r_trial, S_trial
-            if decrease < CONVERGED * self.variance:
-                break
-        return S, p
+        return least_squares.descend(self.residual, {**start, name: float(np.exp(x))}, others,
+                                     tol=CONVERGED * self.variance, steps=GN_STEPS)
 
     def signed_root(self, S: float) -> float:
         """h = sqrt((S - S^) / s^2) - sqrt(chi^2_1(0.95)) (infinite where the model failed)."""

@@ -34,6 +34,25 @@ the eq. 2 flow stresses s_i = sigma_Y + K eps_i^n at three plastic strains
 for s_0 < s_1 < s_2 with n > 0 and sigma_Y > 0.  With sigma_Y fixed (paper's
 (K, n) fit) the last two strains are used.  The initial simplex is still the
 initial guess plus 5 % per coordinate, and sigma_Y, K, n are reported.
+
+Elastoplastic window (``rom.consistent_E_model: elastoplastic``, default): eq. 13's window
+(:mod:`harnesspipe.calibrate.eq13`) grows while the curve stays within three noise sigmas of
+its secant line; under load-cell noise it runs into the onset of yield where that bends the
+curve gradually (the coarse-taped sets, n = 0.43), the data's slope drops, and a correction
+with the elastic model leaves E about two of its own standard errors low on every noisy
+twin, the hardening compensating (bench/RESULTS.md, "Interval coverage of the ROM stage").
+So after the simplex E is made consistent with the model *at the fitted hardening*: E is
+the root of the estimating equation
+
+    k_data = k_model(E, sigma_Y, K, n),   k the eq. 13 slope over the data's window,
+
+together with the least-squares equations of the hardening on every row, by Newton steps
+from the simplex's point (:func:`elastoplastic_window`; the two are strongly coupled, so
+alternating between them converges slowly).
+On a curve whose window ends before yield (a noise-free curve) this is the elastic
+correction; E keeps eq. 13's meaning -- the initial slope -- whatever the model cannot
+follow later on.  ``elastic``: the correction with the elastic model alone, before the
+simplex (the previous estimator).  fit.json keeps eq. 13's own E (``E_eq13``).
 """
 from __future__ import annotations
 
@@ -42,7 +61,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harnesspipe import rom
-from harnesspipe.calibrate import eq13, profile, uncertainty
+from harnesspipe.calibrate import eq13, least_squares, profile, uncertainty
 from harnesspipe.calibrate.hardening import flow_stresses, hardening_from_three, hardening_from_two
 from harnesspipe.calibrate.objective import l2_error, objective_key
 from harnesspipe.calibrate.simplex import FitResult, nelder_mead
@@ -53,6 +72,8 @@ SHAPE_DEFLECTIONS = (0.0, 10.0, 20.0, 30.0)  # bent-shape frames kept with a fit
 # simplex at the right level, so it does not chase it into the boundary of the
 # admissible set (measured: sigma_Y -> 0 for the half-lap set without it).
 START_SCALING = (0.25, 4.0)
+E_TOL = 1e-6        # the elastoplastic window's Newton steps end when no ln p moves by more than this ...
+E_ITERATIONS = 12   # ... or after this many
 
 
 @dataclass
@@ -60,7 +81,13 @@ class RomFit:
     parameters: dict          # E, sigma_y, K, n
     E_eq13: float
     sigma_y_eq13: float
-    result: FitResult
+    result: FitResult         # the simplex's
+    refine_runs: int = 0      # model runs of the elastoplastic window after it
+
+    @property
+    def nfev(self) -> int:
+        """Model runs of the whole fit."""
+        return self.result.nfev + self.refine_runs
 
 
 def simulate(params: dict, settings: dict, return_shapes: bool = False):
@@ -124,6 +151,75 @@ class Coordinates:
         return p if min(p) > 0.0 else None
 
 
+def hardening_names(rs: dict) -> list[str]:
+    """The parameters the ROM stage fits by least squares on the curve (the simplex's)."""
+    return [k for k in ("sigma_y", "K", "n") if k in rs["simplex_parameters"]]
+
+
+class RowModel:
+    """The ROM's force on the rows ``u`` of a curve, its runs counted."""
+
+    def __init__(self, u, settings: dict):
+        self.u, self.settings, self.runs = u, settings, 0
+
+    def force(self, p: dict) -> np.ndarray:
+        self.runs += 1
+        return simulate_on(self.u, p, self.settings)
+
+
+def window_weights(u, F, settings: dict) -> np.ndarray:
+    """w_i = u_i on the rows of eq. 13's window of F(u), 0 elsewhere: the slope through the
+    origin over the window is w^T F / w^T u."""
+    u = np.asarray(u, dtype=float)
+    rs = settings["rom"]
+    u_lin = eq13.linear_part(u, F, settings["three_point"]["span"], rs["linear_window"])[1]
+    return np.where((u > 0.0) & (u <= u_lin), u, 0.0)
+
+
+def elastoplastic_window(u, F, params: dict, settings: dict) -> tuple[dict, int]:
+    """(parameters, model runs): E from the data's eq. 13 slope with the model at the
+    hardening, the hardening by least squares (module docstring), from ``params``; the
+    joint equations B^T (F - F(p)) = 0, B = [w, J_h] (:func:`window_weights`, J = dF / d ln p),
+    by Newton steps B^T J d = B^T r in ln p (no ln p moved by more than MAX_STEP) until no ln p
+    moves by more than E_TOL; ``params`` themselves where the model fails on the way or the
+    data's slope already matches the model's."""
+    u, F = np.asarray(u, dtype=float), np.asarray(F, dtype=float)
+    w = window_weights(u, F, settings)
+    model, names, p = RowModel(u, settings), ["E", *hardening_names(settings["rom"])], dict(params)
+    try:
+        r = F - model.force(p)
+        if abs(w @ r) < E_TOL * abs(w @ F):
+            return dict(params), model.runs
+        for _ in range(E_ITERATIONS):
+            J = uncertainty.log_sensitivities(model.force, p, names)
+            B = np.column_stack([w, J[:, 1:]])
+            d = np.linalg.lstsq(B.T @ J, B.T @ r, rcond=None)[0]
+            d *= min(1.0, least_squares.MAX_STEP / max(np.abs(d).max(), 1e-300))
+            p = {**p, **{k: p[k] * float(np.exp(dk)) for k, dk in zip(names, d)}}
+            r = F - model.force(p)
+            if np.abs(d).max() < E_TOL:
+                break
+    except (RuntimeError, ArithmeticError, ValueError):
+        return dict(params), model.runs
+    return (p, model.runs) if np.all(np.isfinite(r)) else (dict(params), model.runs)
+
+
+def elastoplastic_log_modulus_gradient(u, F, params: dict, settings: dict) -> np.ndarray:
+    """d ln E / dF_i of the elastoplastic window's E on the rows of F(u), the window held:
+    the estimating equation w^T (F - F(p)) = 0 (w_i = u_i on the window's rows) with the
+    hardening by least squares (J_h, its pseudo-inverse P) linearises to
+    G = w^T Q / (w^T Q J_E), Q = I - J_h P, J = dF / d ln p -- for a model elastic over the
+    window (w^T J_h = 0, J_E = F) eq. 13's own gradient
+    (:func:`harnesspipe.calibrate.eq13.log_modulus_gradient`)."""
+    u, F = np.asarray(u, dtype=float), np.asarray(F, dtype=float)
+    w = window_weights(u, F, settings)
+    names = hardening_names(settings["rom"])
+    J = uncertainty.log_sensitivities(lambda p: simulate_on(u, p, settings), params, ["E", *names])
+    J_h = J[:, 1:]
+    wQ = w - (w @ J_h) @ np.linalg.pinv(J_h) if names else w
+    return wQ / float(wQ @ J[:, 0])
+
+
 def fit(u, F, settings: dict, log_path=None) -> RomFit:
     """Calibrate (E, sigma_Y, K, n) of the effective beam against the curve F(u)."""
     u, F = np.asarray(u, dtype=float), np.asarray(F, dtype=float)
@@ -149,7 +245,10 @@ def fit(u, F, settings: dict, log_path=None) -> RomFit:
                       fatol=rs["simplex"]["fatol"], maxfev=settings["maxfev"],
                       restarts=rs["simplex"]["restarts"], start_scaling=START_SCALING, log_path=log_path,
                       key=objective_key(u, F, settings))
-    return RomFit(params_of(res.x), E_eq13, sigma_y_eq13, res)
+    if not (rs["model_consistent_E"] and rs["consistent_E_model"] == "elastoplastic"):
+        return RomFit(params_of(res.x), E_eq13, sigma_y_eq13, res)
+    params, runs = elastoplastic_window(u, F, params_of(res.x), settings)
+    return RomFit(params, E_eq13, sigma_y_eq13, res, runs)
 
 
 def fit_uncertainty(u, replicates, params: dict, settings: dict) -> dict:
@@ -172,12 +271,13 @@ def fit_uncertainty(u, replicates, params: dict, settings: dict) -> dict:
     u, R = np.asarray(u, dtype=float), np.atleast_2d(np.asarray(replicates, dtype=float))
     span, r_o, rs = settings["three_point"]["span"], settings["r_o"], settings["rom"]
     F_mean = R.mean(axis=0)
-    fitted = ["K", "n"]
+    fitted = hardening_names(rs)
     closed_form = {}
-    gradients = {"E": eq13.log_modulus_gradient(u, F_mean, span, rs["linear_window"])}
-    if "sigma_y" in rs["simplex_parameters"]:
-        fitted.insert(0, "sigma_y")
+    if rs["model_consistent_E"] and rs["consistent_E_model"] == "elastoplastic":
+        gradients = {"E": elastoplastic_log_modulus_gradient(u, F_mean, params, settings)}
     else:
+        gradients = {"E": eq13.log_modulus_gradient(u, F_mean, span, rs["linear_window"])}
+    if "sigma_y" not in rs["simplex_parameters"]:
         gradients["sigma_y"] = eq13.log_yield_stress_gradient(u, F_mean, span, rs["yield_deflection"])
         if len(R) >= 2:
             closed_form["sigma_y"] = [eq13.yield_stress(u, Fk, span, r_o, rs["yield_deflection"])

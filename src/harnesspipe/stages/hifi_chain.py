@@ -410,6 +410,11 @@ def _rom_fit(u, F, settings, log_path):
     return rom_fit.fit(u, F, settings, log_path=log_path)
 
 
+def _rom_names(rs):
+    from harnesspipe.calibrate import rom as rom_fit
+    return rom_fit.hardening_names(rs)
+
+
 def _rom_simulate(params, settings):
     from harnesspipe.calibrate import rom as rom_fit
     return rom_fit.simulate(params, settings)
@@ -440,11 +445,11 @@ def rom_crosscheck(case: str, curve_csv: Path, settings: dict, outdir: Path,
     path = write_fit(outdir, stage="hifi_rom", item=case, test_id=f"hifi:{case}",
                      parameters={k: result.parameters[k] for k in ("E", "sigma_y", "K", "n")},
                      error_l2=l2_error(F, F_fit), error_rel=relative_l2_error(F, F_fit),
-                     nfev=result.result.nfev, converged=result.result.converged,
+                     nfev=result.nfev, converged=result.result.converged,
                      wall_s=time.perf_counter() - t0, curve=curve,
                      extra={"E_eq13": result.E_eq13, "sigma_y_eq13": result.sigma_y_eq13,
                             "reference": "hifi", "hifi_curve": str(curve_csv),
-                            "fitted": list(settings["rom"]["simplex_parameters"])})
+                            "fitted": _rom_names(settings["rom"])})
     plots.save(plots.hifi_rom_figure(hifi, curve, title=f"{case}: ROM on the hi-fi curve", label=label),
                outdir / "fit.png")
     return read_fit(path)

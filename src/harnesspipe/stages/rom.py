@@ -66,11 +66,11 @@ def fit_case(case: str, reference: Path, settings: dict, outdir: Path) -> dict:
     path = write_fit(outdir, stage="rom", item=case, test_id=test_id,
                      parameters={k: result.parameters[k] for k in ("E", "sigma_y", "K", "n")},
                      error_l2=l2_error(F_ref, F_fit), error_rel=relative_l2_error(F_ref, F_fit),
-                     nfev=result.result.nfev, converged=result.result.converged,
+                     nfev=result.nfev, converged=result.result.converged,
                      wall_s=wall_s, curve=curve,
                      extra={"E_eq13": result.E_eq13, "sigma_y_eq13": result.sigma_y_eq13,
                             "reference": settings["reference"],
-                            "fitted": list(settings["rom"]["simplex_parameters"]),
+                            "fitted": rom_fit.hardening_names(settings["rom"]),
                             "rows": int(u.size), **uncertainty, "flow_stress": flow})
     title = f"{case}: ROM at fitted properties"
     if settings["reference"] == "hifi":

@@ -11,7 +11,7 @@ import json
 
 from harnesspipe.stages import chain_settings as chain
 
-ROM_KEYS = ("model_consistent_E", "linear_window", "yield_deflection", "simplex_parameters",
+ROM_KEYS = ("model_consistent_E", "consistent_E_model", "linear_window", "yield_deflection", "simplex_parameters",
             "simplex_space", "reference_strains", "simplex", "initial_guess")
 BRANCH_KEYS = ("properties", "properties_source", "geometry", "n_steps", "dt_min", "stroke",
                "rate", "alpha_bounds", "alpha_xatol")
