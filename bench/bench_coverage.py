@@ -115,11 +115,13 @@ reported correlations."""
 specimen scatter of each parameter, 0.5 % load-cell noise, 201 rows; curves by the ROM on
 the quick profile's mesh) and fitted by the ROM stage on the same mesh (the measured mean
 as reference; E by eq. 13 with the model-consistent factor, then the flow-stress simplex on
-(sigma_Y, K, n); simplex budget {maxfev}, {unconverged} of {seeds * len(items)} fits not
+(sigma_Y, K, n), then E matched to the data's eq. 13 slope with the model at the fitted
+hardening, jointly with the hardening's least squares (``rom.consistent_E_model:
+elastoplastic``); simplex budget {maxfev}, {unconverged} of {seeds * len(items)} fits not
 converged)."""
         intervals = INTERVALS.format(
-            rom_truth="; for the ROM stage E by eq. 13 on that noise-free mean curve and "
-                      "(sigma_Y, K, n) by least squares at that E",
+            rom_truth="; for the ROM stage the same estimating equations (E's over eq. 13's "
+                      "window, the hardening's least squares) on that noise-free mean curve",
             table="Table 3; cwb19_t1_open_coarse: the twin's scaled coarse-taped set")
         flow = """Flow stress sigma_Y + K eps_p^n at the issue's strains (2e-3, 5e-3, 2e-2), its SE by the
 delta method from the reported correlations."""
