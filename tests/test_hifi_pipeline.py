@@ -184,6 +184,37 @@ def test_flat_screen_ends_nelder_mead_after_its_first_simplex(tmp_path):
     assert rejected.nfev > 4
 
 
+def test_a_search_rests_at_the_near_tie_nearest_its_start(tmp_path):
+    """A valley flat within 1e-6 over 0.3..0.7 (the data cannot tell those apart) tilted
+    towards 0.3: Brent alone ends near 0.3.  With the start 0.95 and a tie of 0.01 (the
+    measured mean's uncertainty) it rests at the evaluated point nearest the start among
+    those within 0.01 of the best -- on the valley's far side -- and says so; a tie that
+    takes in every evaluated point keeps the start; Nelder-Mead likewise."""
+    def valley(x):
+        return 10.0 + 1e-6 * x[0] + 50.0 * max(abs(x[0] - 0.5) - 0.2, 0.0) ** 2
+
+    bare = hcal.bounded_fit(valley, "T", (0.0, 1.0), xatol=1e-5, maxfev=60, keep=0.95)
+    assert bare.x[0] < 0.35
+    tied = hcal.bounded_fit(valley, "T", (0.0, 1.0), xatol=1e-5, maxfev=60, keep=0.95, tie=0.01)
+    trace = tied.trace
+    near = trace[trace["error"] <= trace["error"].min() + 0.01]
+    assert tied.x[0] == near["T"].iloc[int(np.argmin(np.abs(near["T"] - 0.95)))]
+    assert 0.6 < tied.x[0] <= 0.7 + np.sqrt(0.01 / 50.0) and "nearest the start" in tied.message
+    assert tied.fun <= trace["error"].min() + 0.01
+    everything = hcal.bounded_fit(valley, "T", (0.0, 1.0), xatol=1e-5, maxfev=60, keep=0.95, tie=1e3)
+    assert everything.x[0] == 0.95
+
+    def bowl(x):
+        return 5.0 + float(np.sum((x - np.array([2.0, 1.0])) ** 2))
+
+    simplex = hcal.simplex_fit(bowl, {"a": 1.0, "b": 2.0}, xatol=1e-6, fatol=1e-9, maxfev=200,
+                               keep_start=True, tie=0.5)
+    assert simplex.fun <= 5.0 + 0.5 and simplex.fun > 5.0 + 1e-3   # moved off the minimum ...
+    tr = simplex.trace[simplex.trace["error"] <= simplex.trace["error"].min() + 0.5]
+    d = np.hypot((tr["a"] - 1.0) / 1.0, (tr["b"] - 2.0) / 2.0)
+    assert np.hypot(simplex.x[0] - 1.0, (simplex.x[1] - 2.0) / 2.0) == pytest.approx(d.min())  # ... to the start's nearest
+
+
 def test_failed_run_is_a_logged_rejected_point(tmp_path):
     calls = []
 
@@ -318,7 +349,8 @@ def test_fit_step_screens_against_the_scatter_of_the_measured_mean(tmp_path, fak
     """mu_rtb in [0, 0.3]: Brent's first points move the fake's error by 0.14 ||u||; three
     replicates +-20 % put the standard error of the mean at 0.22 ||u||: not identifiable,
     the step ends after 2 evaluations and says so; +-5 % (0.055 ||u||) or the screen off
-    (flat_factor 0): the search goes on."""
+    (flat_factor 0): the search goes on, to the bound 0.3 -- with the screen on it rests at
+    the evaluated point nearest the start within 0.055 ||u|| of the best."""
     u = np.linspace(0.0, 30.0, 101)
     refs = {"cwb19_t2_closed": write_prepared(tmp_path / "closed.h5", "cwb19_t2_closed",
                                               fake.force(u, fake.TRUTH, "closed_tube"), u, scatter=scatter)}
@@ -332,8 +364,10 @@ def test_fit_step_screens_against_the_scatter_of_the_measured_mean(tmp_path, fak
     assert ("not identifiable" in fit["message"]) == screened
     if screened:     # a near tie is no choice: the start value, exactly, and the message says so
         assert fit["parameters"]["mu_rtb"] == 0.2 and "start value is kept" in fit["message"]
-    else:
+    elif flat_factor == 0.0:
         assert fit["parameters"]["mu_rtb"] == pytest.approx(0.3, abs=2e-3)
+    else:            # the search went to the bound; it rests at the point nearest the start within the tie
+        assert 0.2 < fit["parameters"]["mu_rtb"] < 0.3 - 2e-3 and "nearest the start" in fit["message"]
 
 
 def test_flat_screen_is_not_fooled_by_rejected_points():
@@ -529,7 +563,7 @@ def rom_fit(u, F, settings, log_path):
     log.append(np.array([1.0]), 0.0, 0.0)
     res = types.SimpleNamespace(nfev=1, converged=True)
     return types.SimpleNamespace(parameters={{"E": 20.0, "sigma_y": 0.5, "K": 2.0, "n": 0.3}},
-                                 E_eq13=20.0, sigma_y_eq13=0.5, result=res)
+                                 E_eq13=20.0, sigma_y_eq13=0.5, result=res, nfev=1)
 
 hifi_chain._rom_fit = rom_fit
 hifi_chain._rom_simulate = lambda p, s: pd.DataFrame({{"deflection_mm": [0.0, 30.0], "force_N": [0.0, 10.0]}})

@@ -24,8 +24,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from harnesspipe.calibrate.objective import l2_error, on_grid
-from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, best_logged,
-                                           check_stop, logged_call, nelder_mead, stopped_at)
+from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, check_stop,
+                                           logged_call, nelder_mead, settled, stopped_at)
 
 REJECT_FACTOR = 10.0
 #: a simulated curve may end this fraction of the window's end short of it (the feeder stops
@@ -168,12 +168,13 @@ def read_rejected(path: Path, key: str | None = None) -> list[dict]:
 
 
 def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, key="",
-                maxfev: int = 30, stop=None, keep: float | None = None) -> FitResult:
+                maxfev: int = 30, stop=None, keep: float | None = None, tie: float = 0.0) -> FitResult:
     """Brent's bounded search for one parameter, every evaluation logged (and replayed).
-    ``stop``, ``keep``: as in :func:`harnesspipe.calibrate.simplex.nelder_mead`.  With
-    both, the start value ``keep`` is evaluated first, so that the stop rule compares it
-    with Brent's first points (a start the data tell apart from them is no near tie), and
-    the result is the best logged point."""
+    ``stop``, ``keep``, ``tie``: as in :func:`harnesspipe.calibrate.simplex.nelder_mead`.
+    The start value ``keep``, when given, is evaluated first: the stop rule compares it with
+    Brent's first points (a start the data tell apart from them is no near tie), and the
+    result is the logged point nearest it among those within ``tie`` of the best error
+    (:func:`harnesspipe.calibrate.simplex.settled`)."""
     log = EvaluationLog(log_path, [name], key)
 
     def wrapped(c):
@@ -182,13 +183,15 @@ def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, ke
         return err
 
     try:
-        if stop is not None and keep is not None:
+        if keep is not None:
             wrapped(keep)
         res = minimize_scalar(wrapped, bounds=tuple(bounds), method="bounded",
                               options={"xatol": xatol, "maxiter": maxfev})
         x, fun, converged, message = [res.x], float(res.fun), bool(res.success), str(res.message)
-        if stop is not None and keep is not None:
-            x, fun = best_logged(log)
+        if keep is not None:
+            x, fun, moved = settled(log, [keep], tie)
+            if moved and tie > 0.0:
+                message += f"; the point nearest the start within {tie:.3g} of the best error is kept"
     except StopSearch as reason:
         x, fun, kept = stopped_at(log, objective, None if keep is None else [keep])
         converged, message = False, f"{reason}; {kept}"
@@ -197,13 +200,15 @@ def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, ke
 
 
 def simplex_fit(objective, x0: dict, *, xatol: float, fatol: float, maxfev: int, log_path=None,
-                key="", stop=None, keep_start: bool = False) -> FitResult:
+                key="", stop=None, keep_start: bool = False, tie: float = 0.0) -> FitResult:
     """The paper's Nelder-Mead (+5 % simplex) on several parameters; ``keep_start``: a
-    search its ``stop`` rule ends rests at ``x0``."""
+    search its ``stop`` rule ends rests at ``x0``, one that ends otherwise at the logged
+    point nearest ``x0`` within ``tie`` of the best error."""
     names = list(x0)
     start = np.array([x0[k] for k in names])
     return nelder_mead(objective, start, names, xatol=xatol, fatol=fatol, maxfev=maxfev,
-                       log_path=log_path, key=key, stop=stop, keep=start if keep_start else None)
+                       log_path=log_path, key=key, stop=stop, keep=start if keep_start else None,
+                       tie=tie)
 
 
 def flat_screen(n_first: int, floor: float, penalty: float = np.inf):

@@ -123,6 +123,22 @@ def best_logged(log: EvaluationLog) -> tuple[np.ndarray, float]:
     return log.rows[i][0], float(errors[i])
 
 
+def settled(log: EvaluationLog, keep, tie: float, scale=None) -> tuple[np.ndarray, float, bool]:
+    """(x, error, moved off the best): of the logged points whose error is within ``tie`` of
+    the smallest, the one nearest the start ``keep`` (distance in x / ``scale``; equal
+    distances: the smaller error, then the smaller x).  Errors closer than the uncertainty of
+    the measured mean do not tell points apart, and which of them comes out best can hinge on
+    the last bits of the runs (explicit dynamics differs between CPUs in those); the start,
+    a documented value, is where the data must move the fit from.  ``tie`` 0: the best."""
+    x_best, best = best_logged(log)
+    keep = np.asarray(keep, dtype=float)
+    scale = np.ones_like(keep) if scale is None else np.asarray(scale, dtype=float)
+    near = [(float(np.linalg.norm((x - keep) / scale)), err, tuple(x)) for x, err, _ in log.rows
+            if np.isfinite(err) and err <= best + tie]
+    _, err, x = min(near)
+    return np.array(x), float(err), not np.array_equal(np.array(x), x_best)
+
+
 def stopped_at(log: EvaluationLog, objective, keep) -> tuple[np.ndarray, float, str]:
     """Where a search that its stop rule ended rests: at ``keep`` when given (its error
     from the log if it was evaluated, else evaluated and logged), else at the best logged
@@ -162,7 +178,7 @@ def evaluate_logged(objective, x0, names, *, log_path=None, key="") -> FitResult
 
 def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
                 log_path=None, key="", restarts=0, start_scaling=None,
-                step=SIMPLEX_STEP, stop=None, keep=None) -> FitResult:
+                step=SIMPLEX_STEP, stop=None, keep=None, tie: float = 0.0) -> FitResult:
     """Minimise ``objective(x) -> float`` by Nelder-Mead from the paper's simplex.
 
     ``xatol`` is relative to ``x0`` (the search runs on x / x0, so parameters of
@@ -179,6 +195,8 @@ def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
     ``stop(rows) -> reason | None``, asked after every evaluation with the logged rows
     (parameters, error, wall time): a reason ends the search at once, at the best point
     so far (or at ``keep``, see :func:`stopped_at`), with the reason as its message.
+    ``tie`` > 0 with ``keep``: a search that ends rests at the logged point nearest ``keep``
+    among those within ``tie`` of the best error (:func:`settled`).
     ``key`` identifies the objective (e.g. a hash of its data and settings): a log
     written under another key is discarded instead of replayed.
     """
@@ -210,6 +228,11 @@ def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
             converged, message = bool(res.success), str(res.message)
             if improved <= fatol:
                 break
+        if keep is not None and tie > 0.0:
+            x_near, best, moved = settled(log, keep, tie, scale)
+            z = x_near / scale
+            if moved:
+                message += f"; the point nearest the start within {tie:.3g} of the best error is kept"
     except StopSearch as reason:
         x_best, best, kept = stopped_at(log, objective, keep)
         z, converged, message = x_best / scale, False, f"{reason}; {kept}"
