@@ -78,6 +78,11 @@ def _pseudo_inverse(J: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return (Vt[keep].T / sv[keep]) @ U[:, keep].T, Vt.T, keep
 
 
+def determined_pseudo_inverse(J: np.ndarray) -> np.ndarray:
+    """J^+ on the directions the curve determines (those :func:`estimator_map` keeps)."""
+    return _pseudo_inverse(J)[0]
+
+
 def _blank_undetermined(cov: np.ndarray, V: np.ndarray, keep: np.ndarray) -> np.ndarray:
     """Infinite variance for every parameter with a share in the undetermined subspace (the
     norm of its row of V over those directions above SHARE; smaller ones are round-off of a
