@@ -269,8 +269,7 @@ def rom_specimens_fit(truth_record: dict, settings: dict, u, iterations: int = 2
     target = np.mean([on_rows(s) for s in truth_record["samples"].values()], axis=0)
     p = {**specimens_mean(truth_record), "E": rom_fit.effective_modulus(u, target, settings)[0]}
     p = gauss_newton(on_rows, target, p, rom_fit.hardening_names(settings["rom"]), iterations)
-    rs = settings["rom"]
-    if rs["model_consistent_E"] and rs["consistent_E_model"] == "elastoplastic":
+    if rom_fit.elastoplastic(settings["rom"]):
         p = rom_fit.elastoplastic_window(u, target, p, settings)[0]
     return p
 

@@ -156,6 +156,11 @@ class Coordinates:
         return p if min(p) > 0.0 else None
 
 
+def elastoplastic(rs: dict) -> bool:
+    """Whether the fit's E takes the elastoplastic window (module docstring)."""
+    return bool(rs["model_consistent_E"]) and rs["consistent_E_model"] == "elastoplastic"
+
+
 def hardening_names(rs: dict) -> list[str]:
     """The parameters the ROM stage fits by least squares on the curve (the simplex's)."""
     return [k for k in ("sigma_y", "K", "n") if k in rs["simplex_parameters"]]
@@ -211,20 +216,13 @@ def window_row(J: np.ndarray, w: np.ndarray, P: np.ndarray | None = None) -> np.
     return wQ / float(wQ @ J[:, 0])
 
 
-def resolved_pseudo_inverse(J_h: np.ndarray, noise: float) -> np.ndarray:
-    """J_h^+ on the directions of ln h the rows determine to better than RESOLVED in ln p
-    (standard error noise / singular value; all but the singular ones without noise)."""
-    U, sv, Vt = np.linalg.svd(J_h, full_matrices=False)
-    keep = sv > (noise / RESOLVED if noise > 0.0 else uncertainty.SINGULAR * sv.max())
-    return (Vt[keep].T / sv[keep]) @ U[:, keep].T
-
-
 def elastoplastic_window(u, F, params: dict, settings: dict) -> tuple[dict, int]:
     """(parameters, model runs): E from the data's eq. 13 slope with the model at the
     hardening, the hardening by least squares (module docstring), from the simplex's
     ``params``: Gauss-Newton steps in ln p on the joint equations, d_E = G r
     (:func:`window_row`), d_h = P (r - J_E d_E), r = F - F(p), P the hardening's
-    pseudo-inverse on the directions the rows' noise resolves (:func:`resolved_pseudo_inverse`),
+    pseudo-inverse on the directions of ln h the rows' noise resolves to a standard error
+    below RESOLVED (:func:`harnesspipe.calibrate.uncertainty.determined_pseudo_inverse`),
     no ln p moved by more than MAX_STEP, until none moves by more than E_TOL.  The steps so
     leave the flat valley of (sigma_Y, K, n) -- which the data do not determine -- where the
     simplex left it.  ``params`` themselves where the data's slope already matches the
@@ -248,7 +246,7 @@ def elastoplastic_window(u, F, params: dict, settings: dict) -> tuple[dict, int]
             return p, runs
         for _ in range(E_ITERATIONS):
             J = uncertainty.log_sensitivities(force, p, names)
-            P = resolved_pseudo_inverse(J[:, 1:], noise)
+            P = uncertainty.determined_pseudo_inverse(J[:, 1:], noise / RESOLVED)
             d_E = float(window_row(J, w, P) @ r)
             d = np.concatenate([[d_E], P @ (r - J[:, 0] * d_E)])
             d *= min(1.0, MAX_STEP / max(np.abs(d).max(), 1e-300))
@@ -279,7 +277,7 @@ def fit(u, F, settings: dict, log_path=None) -> RomFit:
     start = {"sigma_y": sigma_y_eq13, **rs["initial_guess"]}
     params, res = simplex_at(E, u, F, settings, start, start_scaling=START_SCALING,
                              log_path=log_path, key=objective_key(u, F, settings))
-    if not (rs["model_consistent_E"] and rs["consistent_E_model"] == "elastoplastic"):
+    if not elastoplastic(rs):
         return RomFit(params, E_eq13, sigma_y_eq13, res)
     params, runs = elastoplastic_window(u, F, params, settings)
     return RomFit(params, E_eq13, sigma_y_eq13, res, runs)
@@ -291,8 +289,10 @@ def fit_uncertainty(u, replicates, params: dict, settings: dict) -> dict:
     :func:`harnesspipe.calibrate.uncertainty.fit_summary`): the replicate sandwich with E
     (and sigma_Y when the simplex does not fit it) by eq. 13 on each replicate -- E with
     the fit's model-consistent factor -- and the simplex's parameters by least squares;
-    the Fisher standard errors (of this estimator: eq. 13's E, and sigma_Y when not
-    fitted, from the mean's rows in its window, the others fitted to what they leave),
+    the Fisher standard errors (of this estimator: E from the mean's rows in eq. 13's window
+    -- by eq. 13, or by the elastoplastic window's estimating equation
+    (:func:`elastoplastic_log_modulus_gradient`) --, sigma_Y when not fitted by eq. 13, the
+    others fitted to what they leave),
     correlations and chi-square of all four; ``interval95``
     (:func:`harnesspipe.calibrate.profile.fit_intervals`: profile-likelihood intervals of the
     poorly determined simplex parameters, E held at eq. 13's value).  All None
@@ -307,7 +307,7 @@ def fit_uncertainty(u, replicates, params: dict, settings: dict) -> dict:
     F_mean = R.mean(axis=0)
     fitted = hardening_names(rs)
     closed_form = {}
-    if rs["model_consistent_E"] and rs["consistent_E_model"] == "elastoplastic":
+    if elastoplastic(rs):
         gradients = {"E": elastoplastic_log_modulus_gradient(u, F_mean, params, settings)}
     else:
         gradients = {"E": eq13.log_modulus_gradient(u, F_mean, span, rs["linear_window"])}

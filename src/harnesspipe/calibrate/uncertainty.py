@@ -70,17 +70,21 @@ def log_sensitivities(curve: Callable[[dict], np.ndarray], params: dict, names: 
     return np.column_stack(columns)
 
 
-def _pseudo_inverse(J: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _pseudo_inverse(J: np.ndarray, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(J^T J)^-1 J^T on the directions the curve determines (SVD of J: singular values
-    below SINGULAR times the largest are left out), V and the mask of the kept directions."""
+    below SINGULAR times the largest, or below ``floor``, are left out), V and the mask of
+    the kept directions."""
     U, sv, Vt = np.linalg.svd(J, full_matrices=False)
-    keep = sv > SINGULAR * sv.max()
+    keep = sv > max(SINGULAR * sv.max(), floor)
     return (Vt[keep].T / sv[keep]) @ U[:, keep].T, Vt.T, keep
 
 
-def determined_pseudo_inverse(J: np.ndarray) -> np.ndarray:
-    """J^+ on the directions the curve determines (those :func:`estimator_map` keeps)."""
-    return _pseudo_inverse(J)[0]
+def determined_pseudo_inverse(J: np.ndarray, floor: float = 0.0) -> np.ndarray:
+    """J^+ on the directions the curve determines (those :func:`estimator_map` keeps), and
+    of those only the ones with a singular value above ``floor``: with J = dF / d ln p and
+    row noise s, floor = s / c keeps the directions of ln p the rows determine to a standard
+    error below c."""
+    return _pseudo_inverse(J, floor)[0]
 
 
 def _blank_undetermined(cov: np.ndarray, V: np.ndarray, keep: np.ndarray) -> np.ndarray:
