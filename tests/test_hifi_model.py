@@ -166,7 +166,7 @@ def test_close_and_kick_is_the_closing_half_step_then_the_next_opening():
     assert np.array_equal(out[0.0][1], out[0.0][2]) and not out[0.0][3].any()
 
 SUMMARY_KEYS = {"wall_s", "steps", "dt", "f_m", "ke_ie_max", "energy_error", "n_beam_elements",
-                "n_shell_elements", "contact_pairs_max"}
+                "n_shell_elements", "contact_pairs_max", "force_drop"}
 
 
 @pytest.fixture(scope="module")
@@ -217,6 +217,25 @@ def test_full_cwb_run_writes_shapes_and_slip_out(cwb_run):
     assert m.points[:, 1].min() < -25.0                    # bent: the mid-span went down ~30 mm
     slip = pd.read_csv(files / "slip_out.csv")
     assert len(slip) == 19 and np.all(np.isfinite(slip[["left_mm", "right_mm"]]))
+
+
+def test_force_drop_finds_the_fall_below_the_running_peak_and_tells_a_snap_from_softening():
+    from harnesspipe.models.hifi import force_drop, is_snap
+    u = np.linspace(0.0, 30.0, 301)
+    rising = 10.0 * np.sqrt(u)
+    assert force_drop(u, rising) == {"drop_N": 0.0, "fraction": 0.0, "from_mm": 0.0, "to_mm": 0.0}
+    assert not is_snap(force_drop(u, rising))
+    # a snap: 11.6 N at 24 mm falls to 6.4 N at 26 mm and recovers to 8.8 N at 30 mm
+    snap = np.interp(u, [0.0, 24.0, 26.0, 30.0], [0.0, 11.6, 6.4, 8.8])
+    d = force_drop(u, snap)
+    assert d["drop_N"] == pytest.approx(5.2) and d["fraction"] == pytest.approx(5.2 / 11.6)
+    assert (d["from_mm"], d["to_mm"]) == pytest.approx((24.0, 26.0))
+    assert is_snap(d)
+    # softening: the same fraction lost over 25 mm is no snap
+    soft = np.interp(u, [0.0, 5.0, 30.0], [0.0, 10.0, 10.0 * (1 - 5.2 / 11.6)])
+    d = force_drop(u, soft)
+    assert d["fraction"] == pytest.approx(5.2 / 11.6) and (d["from_mm"], d["to_mm"]) == pytest.approx((5.0, 30.0))
+    assert not is_snap(d)
 
 
 def _cli(*args, cwd=None):

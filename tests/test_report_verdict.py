@@ -81,6 +81,7 @@ def tree(tmp_path):
     (virtual / "summary.json").write_text(json.dumps(
         {"case": "cwb19_t2_closed", "role": "calibration", "wall_s": 20.0, "steps": 1000, "dt": 1e-4,
          "ke_ie_max": 0.05, "energy_error": 0.001, "contact_pairs_max": 12,
+         "force_drop": {"drop_N": 3.0, "fraction": 0.2, "from_mm": 14.0, "to_mm": 15.5},
          "measured": {"test_id": "bend_cwb19_t2_closed", "error_l2": 10.0, "error_rel": 0.5}}))
     (res / "hifi" / "interface.csv").write_text("parameter,value\nmu_rtb,0.595\ndelta0,0.05\n")
     fits["hifi"] = [res / "hifi" / "interface.csv", virtual / "summary.json"]   # as the rule passes them
@@ -163,6 +164,10 @@ def test_report_leads_with_the_verdict_and_generated_limitations(tree):
     assert "quick profile" in limits and "synthetic twin" not in limits     # no truth file: not said
     assert ("1 of 1 hi-fi virtual tests exceed the quasi-static target KE/IE 0.02 of Sec. 4.1 (up to 0.05; "
             "19 x type 2, closed tube)") in limits
+    assert ("1 of 1 hi-fi virtual tests snap: their force falls by 10 % or more of its peak within 5 mm "
+            "(19 x type 2, closed tube: 3 N (20 %) between 14.0 and 15.5 mm)") in limits
+    hifi = page[page.index("id='hifi'"):page.index("id='rom'")]
+    assert "3 (20&nbsp;% of the peak)</td><td><span class='bad'>a snap, from 14.0 to 15.5 mm" in hifi
     verdict_table = page[page.index("id='parameters'"):page.index("id='contents'")]
     assert verdict_table.count("<tr>") == 1 + 11 and verdict_table.count("<tr class='stage'>") == 4
     assert "st-bound'>on a bound</span> <span class='note'>[0.05, 0.6]</span>" in verdict_table

@@ -185,6 +185,34 @@ def _slip_out(system) -> pd.DataFrame:
                          "left_mm": ux[ends[:, 0]] - ref[0], "right_mm": -(ux[ends[:, 1]] - ref[1])})
 
 
+def force_drop(u, F) -> dict:
+    """The largest fall of the feeder force below its running peak: ``drop_N`` = max over
+    the run of max(F up to u) - F(u), the deflections of that peak and of the trough
+    (``from_mm``, ``to_mm``) and ``fraction`` = drop / peak.  A fall over a few mm with a
+    burst of kinetic energy is a snap of the specimen (bench/RESULTS.md "Force drops of the
+    virtual tests": the compressed wires buckling in the covering's clearance); a fall
+    over the whole stroke is softening.  A force that never falls gives drop 0."""
+    u, F = np.asarray(u, dtype=float), np.asarray(F, dtype=float)
+    if F.size == 0:
+        return {"drop_N": 0.0, "fraction": 0.0, "from_mm": 0.0, "to_mm": 0.0}
+    fall = np.maximum.accumulate(F) - F
+    i = int(np.argmax(fall))
+    j = int(np.argmax(F[:i + 1]))
+    peak = float(F[j])
+    return {"drop_N": float(fall[i]), "fraction": float(fall[i] / peak) if peak > 0.0 else 0.0,
+            "from_mm": float(u[j]), "to_mm": float(u[i])}
+
+
+SNAP_FRACTION = 0.1   # a fall of at least this fraction of the peak force ...
+SNAP_SPAN_MM = 5.0    # ... within this deflection of the peak is a snap (:func:`is_snap`)
+
+
+def is_snap(drop: dict | None) -> bool:
+    """Whether a :func:`force_drop` is a snap: at least ``SNAP_FRACTION`` of the peak force
+    lost within ``SNAP_SPAN_MM`` of deflection (the tests' mean curves never fall so)."""
+    return bool(drop) and drop["fraction"] >= SNAP_FRACTION and drop["to_mm"] - drop["from_mm"] <= SNAP_SPAN_MM
+
+
 def end_time(T: float, stop_deflection: float, stroke: float) -> float:
     """Time at which the feeder (smooth step over the loading time ``T`` to ``stroke``)
     reaches ``stop_deflection``; ``T`` when that is 0 or not below the stroke.  A fit on a
@@ -263,6 +291,7 @@ def three_point(inp: HifiInputs, n_shapes: int = 4, settings: DynamicsSettings |
         "energies": {k: float(hist[k].iloc[-1]) for k in (*FAMILIES, "KE", "W_ext", "plastic")},
         "debonded_ties": system.debonded(),
         "tie_separation_max_mm": system.tie_separation_max(),
+        "force_drop": force_drop(curve["deflection_mm"], curve["force_N"]),
         "phase_s": {**system.phase, "integrator and bookkeeping": res.wall_s - sum(system.phase.values())},
         "shell_mass_scale": system.shell_mass_scale,
         "added_mass_fraction": system.added_mass_fraction,

@@ -490,6 +490,18 @@ def _negative_energy_note(history: pd.DataFrame, summary: dict) -> str:
             f"energies = external work closes{closes}.</p>")
 
 
+def _force_drop_rows(summary: dict) -> list[list]:
+    """The run's largest force drop below its running peak, flagged when it is a snap."""
+    from harnesspipe.models.hifi import is_snap
+    d = summary.get("force_drop")
+    if not d:
+        return []
+    where = f"from {d['from_mm']:.1f} to {d['to_mm']:.1f} mm"
+    check = Raw(f"<span class='bad'>a snap, {html.escape(where)}</span>") if is_snap(d) else where
+    return [["largest force drop below its running peak [N]",
+             f"{d['drop_N']:.3g} ({100.0 * d['fraction']:.0f} % of the peak)", check]]
+
+
 def _hifi_run_block(title: str, folder: Path, measured, cfg: dict | None = None,
                     report_dir: Path | None = None) -> tuple[str, dict | None]:
     """Curve vs measured band, energies and the summary numbers of one hi-fi run."""
@@ -506,7 +518,7 @@ def _hifi_run_block(title: str, folder: Path, measured, cfg: dict | None = None,
     if (folder / "shapes.png").exists():
         data = base64.b64encode((folder / "shapes.png").read_bytes()).decode()
         figs.append(f'<img alt="shapes {html.escape(title)}" src="data:image/png;base64,{data}">')
-    numbers = solver_table(summary, cfg or {})
+    numbers = solver_table(summary, cfg or {}) + _force_drop_rows(summary)
     m = summary.get("measured")
     if m:
         numbers.append([f"||e||_l2 vs test {m['test_id']} [N]", m["error_l2"], ""])

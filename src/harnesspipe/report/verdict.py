@@ -329,6 +329,24 @@ def _quasi_static(results: Path, cfg: dict) -> str | None:
             f"{'; '.join(physical_name(k, cfg) for k in above)}): their inertia is not negligible.")
 
 
+def _snaps(results: Path, cfg: dict) -> str | None:
+    """The hi-fi virtual tests whose force snaps (:func:`harnesspipe.models.hifi.is_snap`:
+    a tenth of the peak force or more lost within a few mm), or None."""
+    from harnesspipe.models.hifi import SNAP_FRACTION, SNAP_SPAN_MM, is_snap
+    drops = {p.parent.name: json.loads(p.read_text()).get("force_drop")
+             for p in sorted((Path(results) / "hifi" / "virtual").glob("*/summary.json"))}
+    snaps = {k: d for k, d in drops.items() if is_snap(d)}
+    if not snaps:
+        return None
+    listed = "; ".join(f"{physical_name(k, cfg)}: {d['drop_N']:.3g} N ({_pct(d['fraction'])}) between "
+                       f"{d['from_mm']:.1f} and {d['to_mm']:.1f} mm" for k, d in snaps.items())
+    return (f"{len(snaps)} of {len(drops)} hi-fi virtual tests snap: their force falls by "
+            f"{_pct(SNAP_FRACTION)} or more of its peak within {SNAP_SPAN_MM:g} mm ({listed}), where "
+            "the measured means rise. Where such a snap falls decides much of a curve's error, and "
+            "it moves with the build and interface values: a calibration on these curves partly "
+            "fits where the snap happens.")
+
+
 def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
     """Each virtual test with a measured test: case, role, error, goal, force ratio."""
     out = []
@@ -414,8 +432,8 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
     if unconverged:
         out.append("The optimiser stopped at its evaluation limit without converging for: "
                    + "; ".join(unconverged) + ".")
-    sentence = _quasi_static(results, cfg)
-    out += [sentence] if sentence else []
+    for sentence in (_quasi_static(results, cfg), _snaps(results, cfg)):
+        out += [sentence] if sentence else []
     if truth:
         out.append("The test data are the synthetic twin, generated from the paper's values "
                    "(data/experimental/README.md): agreement with the paper's tables is agreement "
