@@ -25,6 +25,7 @@ TABLE = [("case", "construction", "{}"), ("wires", "wires", "{}"), ("covering", 
          ("K", "K [MPa]", "{:.3g}"), ("n", "n", "{:.3g}"), ("r_o", "r_o [mm]", "{:.3g}"),
          ("EI", "EI [N mm²]", "{:.4g}"), ("kappa_y", "κ_Y [1/mm]", "{:.3g}"),
          ("ke_ie", "KE/IE", "{:.3g}"), ("energy_error", "energy error", "{:.2g}"),
+         ("force_drop", "force drop", "{:.0%}"),
          ("rom_error_rel", "ROM rel. error", "{:.3f}"), ("hifi_wall_s", "hi-fi wall [s]", "{:.0f}"),
          ("status", "status", "{}"), ("message", "message", "{}")]
 STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}"

@@ -52,7 +52,7 @@ def virtual_test(name: str, settings: dict, outdir: Path) -> dict:
     else:
         result = {"case": name, "status": "ok", "wall_s": summary["wall_s"], "steps": summary["steps"],
                   "ke_ie": summary["ke_ie_max"], "quasi_static": summary["quasi_static"],
-                  "energy_error": summary["energy_error"]}
+                  "energy_error": summary["energy_error"], "force_drop": summary.get("force_drop")}
     result.update(interface_source=settings["interface_source"],
                   coverings_source=settings["coverings_source"])
     write_json(outdir / "result.json", result)
