@@ -232,15 +232,18 @@ def test_failed_run_gives_a_failed_row_without_numbers(cfg, demo, tmp_path):
     assert float(back[6]) == pytest.approx(7 * 4.34e-9 * 0.7**2 / 7.05**2)
 
 
-def test_a_run_that_snaps_or_is_not_quasi_static_says_so_in_its_row():
+def test_a_run_that_falls_or_is_not_quasi_static_says_so_in_its_row():
     smooth = {"quasi_static": True, "ke_ie": 0.01, "force_drop": {"drop_N": 0.1, "fraction": 0.01,
                                                                 "from_mm": 28.0, "to_mm": 29.0}}
     assert quality_message(smooth) == ""
     snap = {**smooth, "force_drop": {"drop_N": 3.8, "fraction": 0.37, "from_mm": 13.7, "to_mm": 15.7}}
-    assert quality_message(snap) == ("the virtual test snaps: its force falls 37 % between 13.7 and "
-                                     "15.7 mm, and the beam is fitted through it")
+    assert quality_message(snap) == ("the virtual test's force falls 37 % between 13.7 and 15.7 mm "
+                                     "(a snap), and the beam is fitted through it")
+    slow = {**smooth, "force_drop": {"drop_N": 4.8, "fraction": 0.78, "from_mm": 23.1, "to_mm": 30.0}}
+    assert quality_message(slow) == ("the virtual test's force falls 78 % between 23.1 and 30.0 mm, "
+                                     "and the beam is fitted through it")
     both = quality_message({**snap, "quasi_static": False, "ke_ie": 0.05})
-    assert both.startswith("KE/IE 0.05 above the paper's 2 %") and "; the virtual test snaps" in both
+    assert both.startswith("KE/IE 0.05 above the paper's 2 %") and "; the virtual test's force falls" in both
     assert quality_message({"quasi_static": True}) == ""          # a result.json from before force_drop
 
 

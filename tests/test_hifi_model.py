@@ -220,22 +220,25 @@ def test_full_cwb_run_writes_shapes_and_slip_out(cwb_run):
 
 
 def test_force_drop_finds_the_fall_below_the_running_peak_and_tells_a_snap_from_softening():
-    from harnesspipe.models.hifi import force_drop, is_snap
+    from harnesspipe.models.hifi import force_drop, is_fall, is_snap
     u = np.linspace(0.0, 30.0, 301)
     rising = 10.0 * np.sqrt(u)
     assert force_drop(u, rising) == {"drop_N": 0.0, "fraction": 0.0, "from_mm": 0.0, "to_mm": 0.0}
-    assert not is_snap(force_drop(u, rising))
+    assert not is_fall(force_drop(u, rising)) and not is_snap(force_drop(u, rising))
     # a snap: 11.6 N at 24 mm falls to 6.4 N at 26 mm and recovers to 8.8 N at 30 mm
     snap = np.interp(u, [0.0, 24.0, 26.0, 30.0], [0.0, 11.6, 6.4, 8.8])
     d = force_drop(u, snap)
     assert d["drop_N"] == pytest.approx(5.2) and d["fraction"] == pytest.approx(5.2 / 11.6)
     assert (d["from_mm"], d["to_mm"]) == pytest.approx((24.0, 26.0))
-    assert is_snap(d)
-    # softening: the same fraction lost over 25 mm is no snap
+    assert is_fall(d) and is_snap(d)
+    # softening: the same fraction lost over 25 mm is a fall, not a snap
     soft = np.interp(u, [0.0, 5.0, 30.0], [0.0, 10.0, 10.0 * (1 - 5.2 / 11.6)])
     d = force_drop(u, soft)
     assert d["fraction"] == pytest.approx(5.2 / 11.6) and (d["from_mm"], d["to_mm"]) == pytest.approx((5.0, 30.0))
-    assert not is_snap(d)
+    assert is_fall(d) and not is_snap(d)
+    # a ripple of 5 % is neither
+    ripple = np.interp(u, [0.0, 10.0, 10.5, 30.0], [0.0, 10.0, 9.5, 15.0])
+    assert not is_fall(force_drop(u, ripple)) and not is_snap(force_drop(u, ripple))
 
 
 def _cli(*args, cwd=None):

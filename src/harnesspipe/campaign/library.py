@@ -73,15 +73,16 @@ def properties(name: str, hifi_dir: Path, settings: dict, outdir: Path) -> dict:
 
 def quality_message(run: dict) -> str:
     """What to doubt in a virtual test that ran (result.json ``run``): KE/IE above the paper's
-    2 %, a snap of its force (:func:`harnesspipe.models.hifi.is_snap`); "" when neither."""
-    from harnesspipe.models.hifi import is_snap
+    2 %, a fall of its force (:func:`harnesspipe.models.hifi.is_fall`); "" when neither."""
+    from harnesspipe.models.hifi import is_fall, is_snap
     notes = []
     if not run.get("quasi_static", True):
         notes.append(f"KE/IE {run['ke_ie']:.3g} above the paper's 2 % (below the rejection limit)")
     drop = run.get("force_drop")
-    if is_snap(drop):
-        notes.append(f"the virtual test snaps: its force falls {100.0 * drop['fraction']:.0f} % between "
-                     f"{drop['from_mm']:.1f} and {drop['to_mm']:.1f} mm, and the beam is fitted through it")
+    if is_fall(drop):
+        notes.append(f"the virtual test's force falls {100.0 * drop['fraction']:.0f} % between "
+                     f"{drop['from_mm']:.1f} and {drop['to_mm']:.1f} mm{' (a snap)' if is_snap(drop) else ''}, "
+                     "and the beam is fitted through it")
     return "; ".join(notes)
 
 

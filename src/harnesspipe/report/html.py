@@ -491,13 +491,16 @@ def _negative_energy_note(history: pd.DataFrame, summary: dict) -> str:
 
 
 def _force_drop_rows(summary: dict) -> list[list]:
-    """The run's largest force drop below its running peak, flagged when it is a snap."""
-    from harnesspipe.models.hifi import is_snap
+    """The run's largest force drop below its running peak, flagged when it is a fall
+    (:func:`harnesspipe.models.hifi.is_fall`), named a snap when sudden."""
+    from harnesspipe.models.hifi import is_fall, is_snap
     d = summary.get("force_drop")
     if not d:
         return []
     where = f"from {d['from_mm']:.1f} to {d['to_mm']:.1f} mm"
-    check = Raw(f"<span class='bad'>a snap, {html.escape(where)}</span>") if is_snap(d) else where
+    check = where
+    if is_fall(d):
+        check = Raw(f"<span class='bad'>{'a snap' if is_snap(d) else 'a fall'}, {html.escape(where)}</span>")
     return [["largest force drop below its running peak [N]",
              f"{d['drop_N']:.3g} ({100.0 * d['fraction']:.0f} % of the peak)", check]]
 

@@ -329,28 +329,30 @@ def _quasi_static(results: Path, cfg: dict) -> str | None:
             f"{'; '.join(physical_name(k, cfg) for k in above)}): their inertia is not negligible.")
 
 
-def _snaps(results: Path, cfg: dict, measured: dict) -> str | None:
-    """The hi-fi virtual tests whose force snaps (:func:`harnesspipe.models.hifi.is_snap`:
-    a tenth of the peak force or more lost within a few mm), and whether the measured means
-    of those cases (``measured``: case -> prepared test) snap too; None when none snaps."""
-    from harnesspipe.models.hifi import SNAP_FRACTION, SNAP_SPAN_MM, force_drop, is_snap
+def _falls(results: Path, cfg: dict, measured: dict) -> str | None:
+    """The hi-fi virtual tests whose force falls by a tenth of its peak or more
+    (:func:`harnesspipe.models.hifi.is_fall`; a snap when within a few mm), and whether the
+    measured means of those cases (``measured``: case -> prepared test) fall too; None when
+    none falls."""
+    from harnesspipe.models.hifi import FALL_FRACTION, SNAP_SPAN_MM, force_drop, is_fall, is_snap
     drops = {p.parent.name: json.loads(p.read_text()).get("force_drop")
              for p in sorted((Path(results) / "hifi" / "virtual").glob("*/summary.json"))}
-    snaps = {k: d for k, d in drops.items() if is_snap(d)}
-    if not snaps:
+    falls = {k: d for k, d in drops.items() if is_fall(d)}
+    if not falls:
         return None
     listed = "; ".join(f"{physical_name(k, cfg)}: {d['drop_N']:.3g} N ({_pct(d['fraction'])}) between "
-                       f"{d['from_mm']:.1f} and {d['to_mm']:.1f} mm" for k, d in snaps.items())
-    tested = [k for k in snaps if k in measured]
-    smooth = [k for k in tested if not is_snap(force_drop(measured[k].grid, measured[k].mean))]
+                       f"{d['from_mm']:.1f} and {d['to_mm']:.1f} mm{', a snap' if is_snap(d) else ''}"
+                       for k, d in falls.items())
+    tested = [k for k in falls if k in measured]
+    steady = [k for k in tested if not is_fall(force_drop(measured[k].grid, measured[k].mean))]
     said = ""
     if tested:
-        which = ("None of their measured means snaps" if len(smooth) == len(tested) else
-                 f"The measured means of {len(smooth)} of these {len(tested)} cases do not snap")
-        said = (f" {which}: where a virtual snap falls decides much of its error, and it moves with "
-                "the build and interface values, so a calibration on such curves partly fits the snap.")
-    return (f"{len(snaps)} of {len(drops)} hi-fi virtual tests snap: their force falls by "
-            f"{_pct(SNAP_FRACTION)} or more of its peak within {SNAP_SPAN_MM:g} mm ({listed})." + said)
+        which = ("None of their measured means falls so" if len(steady) == len(tested) else
+                 f"The measured means of {len(steady)} of these {len(tested)} cases do not fall so")
+        said = (f" {which}: where a virtual fall happens decides much of its error, and it moves "
+                "with the build and interface values, so a calibration on such curves partly fits it.")
+    return (f"{len(falls)} of {len(drops)} hi-fi virtual tests fall by {_pct(FALL_FRACTION)} or more of "
+            f"their peak force (a snap: within {SNAP_SPAN_MM:g} mm) ({listed})." + said)
 
 
 def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
@@ -438,7 +440,7 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
     if unconverged:
         out.append("The optimiser stopped at its evaluation limit without converging for: "
                    + "; ".join(unconverged) + ".")
-    for sentence in (_quasi_static(results, cfg), _snaps(results, cfg, measured)):
+    for sentence in (_quasi_static(results, cfg), _falls(results, cfg, measured)):
         out += [sentence] if sentence else []
     if truth:
         out.append("The test data are the synthetic twin, generated from the paper's values "
