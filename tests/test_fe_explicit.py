@@ -83,16 +83,30 @@ def test_absurd_step_stops_with_clear_error():
     print(msg)
 
 
-def test_smooth_step_time_inverts_the_amplitude():
-    from harnesspipe.fe.solvers.central_difference import smooth_step, smooth_step_time
+@pytest.mark.parametrize("ramp", [0.0, 0.1, 0.25, 0.5])
+def test_the_feeder_reaches_the_test_rate_from_rest_and_keeps_it(ramp):
+    """rate_ramp: at rest at the start, S(1) = 1, S' the integral's derivative (central
+    differences) and continuous through the ramp's end, constant 1 / (1 - ramp/2) after it;
+    rate_ramp_time inverts it; a run's end_time for an early stop follows."""
+    from harnesspipe.fe.solvers.central_difference import rate_ramp, rate_ramp_time
     from harnesspipe.models.hifi import end_time
-    for r in (0.0, 0.1, 2.0 / 3.0, 0.999, 1.0):
-        assert smooth_step(smooth_step_time(r))[0] == pytest.approx(r, abs=1e-12)
-    assert end_time(1.0, 21.0, 30.0) == pytest.approx(smooth_step_time(0.7))
-    assert 0.55 < end_time(1.0, 20.0, 30.0) < 0.65       # 2/3 of the stroke at ~60 % of the time
-    assert end_time(2.0, 0.0, 30.0) == end_time(2.0, 30.0, 30.0) == 2.0
+    c = 1.0 / (1.0 - 0.5 * ramp)
+    assert rate_ramp(0.0, ramp) == (0.0, 0.0) and rate_ramp(1.0, ramp) == (pytest.approx(1.0, abs=1e-15), c)
+    h = 1e-6
+    for x in np.linspace(0.01, 0.99, 37):
+        S, dS = rate_ramp(x, ramp)
+        assert dS == pytest.approx((rate_ramp(x + h, ramp)[0] - rate_ramp(x - h, ramp)[0]) / (2 * h), rel=1e-6, abs=1e-8)
+        assert dS == pytest.approx(c) if x >= ramp else 0.0 <= dS < c
+        assert rate_ramp_time(S, ramp) == pytest.approx(x, abs=1e-12)
+    if ramp > 0.0:
+        assert rate_ramp(ramp * (1 - 1e-12), ramp)[0] == pytest.approx(rate_ramp(ramp, ramp)[0], abs=1e-11)
+        assert rate_ramp(0.5 * ramp, ramp)[1] == pytest.approx(0.5 * c)        # half the rate half-way
+    assert end_time(1.0, 21.0, 30.0, ramp) == pytest.approx(0.7 / c + 0.5 * ramp)
+    assert end_time(2.0, 0.0, 30.0, ramp) == end_time(2.0, 30.0, 30.0, ramp) == 2.0
     with pytest.raises(ValueError, match="outside"):
-        smooth_step_time(1.5)
+        rate_ramp_time(1.5, ramp)
+    with pytest.raises(ValueError, match="outside"):
+        rate_ramp(0.5, 1.0)
 
 
 

@@ -267,6 +267,28 @@ def test_case_loading_time_scale_and_explicit_override():
     assert inputs(cfg, "twb19_t2", {"t_total": "0.5"}).explicit["t_total"] == 0.5
 
 
+@pytest.mark.parametrize("case", ["cwb19_t2_closed", "twb19_t2"])
+def test_the_feeder_runs_at_the_tests_rate_in_physical_time(case):
+    """Past its ramp the feeder moves at the test's 0.5 mm/s (Sec. 2.2: 30 mm in 60 s) in
+    the physical time eq. 6 sees (model speed / time_scale), whatever the case's loading
+    time, and ends the run at the full stroke."""
+    from harnesspipe.models import hifi_mesh as hm
+    from harnesspipe.models.hifi import HifiSystem
+    from harnesspipe.stages.hifi import inputs
+    cfg = load(overrides={"profile": "quick"})
+    inp = inputs(cfg, case, {})
+    s = HifiSystem(hm.build_mesh(inp.case, inp.config, inp.resolution), inp)
+    rate = cfg["three_point"]["deflection"] / cfg["hifi"]["explicit"]["t_phys"]
+    assert rate == pytest.approx(0.5)
+    ramp = cfg["hifi"]["explicit"]["rate_ramp"]
+    for x in (ramp, 0.5, 0.9, 1.0):
+        s.pins.move_to(x * s.T)
+        assert -s.pins.velocity[s.pins.feeder, 1] / s.time_scale == pytest.approx(rate, rel=1e-12)
+    assert s.pins.feeder_displacement() == pytest.approx(cfg["three_point"]["deflection"], rel=1e-12)
+    s.pins.move_to(0.0)
+    assert s.pins.feeder_displacement() == 0.0 and s.pins.velocity[s.pins.feeder, 1] == 0.0
+
+
 def test_wires_sharing_a_node_are_rejected():
     """The pins meet the wires chain by chain in parallel: a mesh whose wires share a node
     (two chains would move it at once) is refused with a clear error."""

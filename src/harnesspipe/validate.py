@@ -30,6 +30,7 @@ RULES = {
        for k in ("K_nn", "K_ss", "K_tt")},
     **{k: ("a mesh count", float(low), True, None, True) for k, low in MESH_MIN.items()},
     "t_total": ("a loading time [s]", 0.0, False, None, False),
+    "rate_ramp": ("a fraction of the loading time", 0.0, True, 0.5, False),   # past half the run the rate is no longer the test's
     "stop_deflection": ("a deflection [mm]", 0.0, True, None, False),
     "f_m": ("a mass-scaling factor", 1.0, True, None, False),
     "safety": ("a fraction of the stable step", 0.0, False, 1.0, False),

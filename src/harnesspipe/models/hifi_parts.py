@@ -12,7 +12,7 @@ from harnesspipe.fe.elements.beam import initial_frames, lobatto_points
 from harnesspipe.fe.elements.beam_explicit import (beam_forces, beam_lumped_mass, beam_plastic_work,
                                                    beam_stable_step)
 from harnesspipe.fe.materials.fiber import disc_fibres
-from harnesspipe.fe.solvers.central_difference import smooth_step
+from harnesspipe.fe.solvers.central_difference import rate_ramp
 
 
 class Wires:
@@ -79,11 +79,13 @@ class Wires:
 class Pins:
     """The rigid 5 mm pins of the three-point test: two fixed rollers and the feeder.
 
-    The feeder (index ``feeder``) moves by ``-deflection`` along y with the smooth-step
-    amplitude over the run, ``y(t) = y0 - d S(t/T)``; the rollers stay.
+    The feeder (index ``feeder``) moves by ``-deflection`` along y over the run at the
+    test's constant rate, reached from rest over the first ``ramp`` of the run
+    (:func:`harnesspipe.fe.solvers.central_difference.rate_ramp`):
+    ``y(t) = y0 - d S(t/T)``; the rollers stay.
     """
 
-    def __init__(self, centres, radius, feeder, deflection, total_time):
+    def __init__(self, centres, radius, feeder, deflection, total_time, ramp):
         self.c0 = np.asarray(centres, dtype=float).copy()
         self.centres = self.c0.copy()
         self.axes = np.tile([0.0, 0.0, 1.0], (self.c0.shape[0], 1))
@@ -92,10 +94,11 @@ class Pins:
         self.feeder = int(feeder)
         self.deflection = float(deflection)
         self.T = float(total_time)
+        self.ramp = float(ramp)
         self.force = np.zeros_like(self.c0)        # force ON each pin (from the contacts)
 
     def move_to(self, t):
-        S, dS, _ = smooth_step(t / self.T)
+        S, dS = rate_ramp(t / self.T, self.ramp)
         self.centres[self.feeder, 1] = self.c0[self.feeder, 1] - self.deflection * S
         self.velocity[self.feeder, 1] = -self.deflection * dS / self.T
 

@@ -20,7 +20,7 @@ from harnesspipe.validate import (check, interface_problem, problem, stop_proble
 #: keys of ``--set`` and their place: interface/explicit parameters, resolution, coverings
 INTERFACE_KEYS = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1", "mu_s",
                   "mu_k", "d_c", "K_nn", "K_ss", "K_tt")
-EXPLICIT_KEYS = ("t_total", "f_m", "safety", "mass_damping", "penalty", "penalty_layers",
+EXPLICIT_KEYS = ("t_total", "rate_ramp", "f_m", "safety", "mass_damping", "penalty", "penalty_layers",
                  "search_margin", "tie_damping", "stop_deflection")
 BUILD_KEYS = ("wire_fill", "end_tape_layers", "tape_tension")    # the specimen's build state (config hifi.build)
 COVERINGS = ("closed_tube", "open_tube", "fabric_tube")

@@ -75,14 +75,38 @@ def smooth_step(x: float):
             60.0 * x * (1.0 - x) * (1.0 - 2.0 * x))
 
 
-def smooth_step_time(r: float) -> float:
-    """The x in [0, 1] at which the smooth step reaches ``S(x) = r`` (bisection: S increases)."""
+def rate_ramp(x: float, ramp: float):
+    """Stroke fraction S and dS/dx at the run fraction ``x`` of a loading at constant rate
+    that starts from rest: the rate rises as the smooth step over the first ``ramp`` of the
+    run, ``dS/dx = c R(x / ramp)``, and stays ``c = 1 / (1 - ramp / 2)`` from there to the
+    end, where S(1) = 1 (the test's constant crosshead rate, Sec. 2.2).  Before the ramp's
+    end ``S = c ramp s^4 (5/2 - 3 s + s^2)``, s = x / ramp, the integral of R; past the
+    run S stays 1 at rest."""
+    if not 0.0 <= ramp < 1.0:
+        raise ValueError(f"rate ramp {ramp} outside [0, 1)")
+    c = 1.0 / (1.0 - 0.5 * ramp)
+    if x <= 0.0:
+        return 0.0, 0.0
+    if x > 1.0:
+        return 1.0, 0.0
+    if x < ramp:
+        s = x / ramp
+        return c * ramp * s**4 * (2.5 - 3.0 * s + s * s), c * smooth_step(s)[0]
+    return c * (x - 0.5 * ramp), c
+
+
+def rate_ramp_time(r: float, ramp: float) -> float:
+    """The run fraction x at which :func:`rate_ramp` reaches ``S(x) = r`` (in closed form
+    on the constant rate, by bisection on the ramp: S increases)."""
     if not 0.0 <= r <= 1.0:
-        raise ValueError(f"smooth step level {r} outside [0, 1]")
-    lo, hi = 0.0, 1.0
+        raise ValueError(f"stroke fraction {r} outside [0, 1]")
+    c = 1.0 / (1.0 - 0.5 * ramp)
+    if r >= 0.5 * c * ramp:
+        return r / c + 0.5 * ramp
+    lo, hi = 0.0, ramp
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        if smooth_step(mid)[0] < r:
+        if rate_ramp(mid, ramp)[0] < r:
             lo = mid
         else:
             hi = mid
