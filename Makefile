@@ -19,8 +19,10 @@ venv: $(STAMP)
 reproduce: $(STAMP)
 	$(VENV)/bin/snakemake --cores 2 --config profile=$(PROFILE)
 
+# Two worker processes, a test file each at a time (its module fixtures built once);
+# the end-to-end pipeline files start first (tests/conftest.py), the slowest listed at the end.
 test: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest -n 2 --dist loadfile --durations=25
 
 bench: $(STAMP)
 	$(PY) bench/bench_rom.py

@@ -25,6 +25,13 @@ def bilinear(u, k=0.8, u_y=3.0, k2=0.1):
     return np.where(u < u_y, k * u, k * u_y + k2 * (u - u_y))
 
 
+def pytest_collection_modifyitems(session, config, items):
+    """The end-to-end pipeline files first (a stable sort): under ``make test``'s two
+    workers (pytest-xdist, a file at a time) the longest file then runs beside the others
+    instead of after them."""
+    items.sort(key=lambda item: item.get_closest_marker("pipeline") is None)
+
+
 @pytest.fixture
 def good_data(tmp_path) -> Path:
     """A data folder with one three-point test of three valid samples (+ markers)."""
