@@ -19,10 +19,12 @@ venv: $(STAMP)
 reproduce: $(STAMP)
 	$(VENV)/bin/snakemake --cores 2 --config profile=$(PROFILE)
 
-# Two worker processes, a test file each at a time (its module fixtures built once);
-# the end-to-end pipeline files start first (tests/conftest.py), the slowest listed at the end.
+# Two worker processes, a test file each at a time (its module fixtures built once), handed
+# out in collection order, where tests/conftest.py puts the end-to-end pipeline files first
+# (xdist's default hands out the files with most tests first: the quick pipeline's file,
+# with 6, then started 25 minutes in); the slowest tests listed at the end.
 test: $(STAMP)
-	$(PY) -m pytest -n 2 --dist loadfile --durations=25
+	$(PY) -m pytest -n 2 --dist loadfile --no-loadscope-reorder --durations=25
 
 bench: $(STAMP)
 	$(PY) bench/bench_rom.py
