@@ -36,7 +36,7 @@ import pandas as pd
 from harnesspipe.fe.assembly.groups import Cylinders, PinFacets, WirePins
 from harnesspipe.fe.assembly.lanes import stack_groups
 from harnesspipe.fe.contact.facet_pins import facets_cylinder_gaps
-from harnesspipe.fe.solvers.central_difference import DynamicsSettings, integrate, prescribed_work
+from harnesspipe.fe.solvers.central_difference import DynamicsSettings, integrate, prescribed_work, ramp_share
 from harnesspipe.models import hifi_mesh as hm
 from harnesspipe.models.hifi_bundle import (FAMILIES, KE_IE_FROM, BundleSystem, HifiInputs,
                                             quasi_static_ratio)
@@ -57,7 +57,7 @@ class HifiSystem(BundleSystem):
         ramp = float(inp.explicit["rate_ramp"])
         self.pins = Pins(mesh.rollers["centres"], mesh.rollers["radius"], 2, tp["deflection"], self.T,
                          ramp)
-        self.time_scale = float(inp.explicit["t_phys"]) / (self.T * (1.0 - 0.5 * ramp))
+        self.time_scale = float(inp.explicit["t_phys"]) / (self.T * ramp_share(ramp))   # model rate / test's
         centre = int(np.argmin(np.hypot(*mesh.wire_yz.T)))
         mid = mesh.wire_nodes[centre, mesh.wire_nodes.shape[1] // 2]
         self.free[mid, 0] = self.free[mid, 2] = False    # axial and lateral rigid-body modes

@@ -75,6 +75,15 @@ def smooth_step(x: float):
             60.0 * x * (1.0 - x) * (1.0 - 2.0 * x))
 
 
+def ramp_share(ramp: float) -> float:
+    """The part of the run the loading of :func:`rate_ramp` would need at its constant rate
+    alone, ``1 - ramp / 2`` (the ramp covers half its time's travel); the constant rate is
+    its inverse."""
+    if not 0.0 <= ramp < 1.0:
+        raise ValueError(f"rate ramp {ramp} outside [0, 1)")
+    return 1.0 - 0.5 * ramp
+
+
 def rate_ramp(x: float, ramp: float):
     """Stroke fraction S and dS/dx at the run fraction ``x`` of a loading at constant rate
     that starts from rest: the rate rises as the smooth step over the first ``ramp`` of the
@@ -82,9 +91,7 @@ def rate_ramp(x: float, ramp: float):
     end, where S(1) = 1 (the test's constant crosshead rate, Sec. 2.2).  Before the ramp's
     end ``S = c ramp s^4 (5/2 - 3 s + s^2)``, s = x / ramp, the integral of R; past the
     run S stays 1 at rest."""
-    if not 0.0 <= ramp < 1.0:
-        raise ValueError(f"rate ramp {ramp} outside [0, 1)")
-    c = 1.0 / (1.0 - 0.5 * ramp)
+    c = 1.0 / ramp_share(ramp)
     if x <= 0.0:
         return 0.0, 0.0
     if x > 1.0:
@@ -100,7 +107,7 @@ def rate_ramp_time(r: float, ramp: float) -> float:
     on the constant rate, by bisection on the ramp: S increases)."""
     if not 0.0 <= r <= 1.0:
         raise ValueError(f"stroke fraction {r} outside [0, 1]")
-    c = 1.0 / (1.0 - 0.5 * ramp)
+    c = 1.0 / ramp_share(ramp)
     if r >= 0.5 * c * ramp:
         return r / c + 0.5 * ramp
     lo, hi = 0.0, ramp
