@@ -75,7 +75,7 @@ def test_build_state_keys_reach_the_run():
     with pytest.raises(ConfigError, match="end_tape_layers=0.5: expected a number of wraps"):
         inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "0.5"})
     assert inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "2.5"}).config["hifi"]["build"] == {
-        "wire_fill": 0.0, "end_tape_layers": 2.5, "tape_tension": 0.0}
+        "wire_fill": 0.0, "tube_closure": 0.0, "end_tape_layers": 2.5, "tape_tension": 0.0}
 
 
 def test_end_tape_layers_thicken_the_end_bands_only():
@@ -94,6 +94,31 @@ def test_end_tape_layers_thicken_the_end_bands_only():
     np.testing.assert_allclose(t3[ends], 3.0 * t1[ends])
     np.testing.assert_array_equal(t3[~ends], t1[~ends])
     np.testing.assert_array_equal(rho3, rho1)
+
+
+def test_closed_slit_tube_is_its_layers_of_wall():
+    """``--set tube_closure``: the slit tube rolled onto the bundle is m = R / R' stacked
+    equivalent walls: E, sigma_y, K and rho x m at the same t_eq (n, nu kept); the tape is
+    untouched; a closure outside [0, 1] is refused naming the key."""
+    from harnesspipe.models import hifi_mesh as hm
+    from harnesspipe.models.hifi_bundle import shell_materials
+    cfg = load()
+    moulded = inputs(cfg, "cwb19_t2_open_coarse", {"tube_closure": "0"})
+    rolled = inputs(cfg, "cwb19_t2_open_coarse", {"tube_closure": "1"})
+    m0 = hm.build_mesh(moulded.case, moulded.config, "quick")
+    m1 = hm.build_mesh(rolled.case, rolled.config, "quick")
+    mat0, t0, rho0 = shell_materials(m0, moulded)
+    mat1, t1, rho1 = shell_materials(m1, rolled)
+    m = m1.info["tube_layers"]
+    assert m == pytest.approx(6.2 / m1.info["tube_mid_radius"]) and m > 1.3
+    tube0, tube1 = m0.shell_part == hm.PART_TUBE, m1.shell_part == hm.PART_TUBE
+    np.testing.assert_allclose(mat1[tube1][0, [0, 2, 3]], m * mat0[tube0][0, [0, 2, 3]])
+    assert mat1[tube1][0, 4] == mat0[tube0][0, 4] and t1[tube1][0] == t0[tube0][0]
+    assert rho1[tube1][0] == pytest.approx(m * rho0[tube0][0])
+    tape0, tape1 = m0.shell_part == hm.PART_TAPE, m1.shell_part == hm.PART_TAPE
+    np.testing.assert_array_equal(mat1[tape1][0], mat0[tape0][0])
+    with pytest.raises(ConfigError, match="tube_closure=1.2: expected a fraction"):
+        inputs(cfg, "cwb19_t2_open_coarse", {"tube_closure": "1.2"})
 
 
 def test_corrugation_pitch_is_a_set_key_of_the_tubes():

@@ -93,11 +93,14 @@ class YMesh:
 
 
 def _segment_config(config: dict, L: float, e: float) -> dict:
-    """The config with the three-point sample replaced by one segment: tube L, wires e beyond."""
+    """The config with the three-point sample replaced by one segment: tube L, wires e beyond.
+    The slit tubes stay as moulded (build ``tube_closure`` 0): the joint's wires leave them
+    through the slit, which a tube rolled shut onto its bundle would not have."""
     tp = config["three_point"]
     over_tube = tp["taped_end"] - 0.5 * (tp["sample_length"] - tp["tube_length"])
     seg = {**tp, "tube_length": L, "sample_length": L + 2.0 * e, "taped_end": e + over_tube}
-    return {**config, "three_point": seg}
+    hifi = {**config["hifi"], "build": {**config["hifi"]["build"], "tube_closure": 0.0}}
+    return {**config, "three_point": seg, "hifi": hifi}
 
 
 def _segment_resolution(res: dict, config: dict, length: float, tube: float) -> dict:

@@ -91,7 +91,11 @@ def shell_materials(mesh, inp: HifiInputs):
     """Per-element (mat row, stiffness thickness, density) of the shells (fe/shell_bt layout).
     The ridged tube is the isotropic J2 equivalent shell, or with ``wall_law: resultant``
     in its covering entry the resultant law of :mod:`harnesspipe.fe.materials.tube_wall`
-    (rows of ``ROW_WIDTH``; the element thickness is then its mass thickness)."""
+    (rows of ``ROW_WIDTH``; the element thickness is then its mass thickness).  A slit tube
+    rolled onto the bundle (``mesh.info["tube_layers"]`` m > 1,
+    :meth:`harnesspipe.models.hifi_mesh_parts.Covering.close_onto`) is m equivalent walls
+    stacked without bond: m times the membrane and the bending stiffness, the yield forces
+    and the mass of one (E, sigma_y, K and rho x m at the same t_eq)."""
     cfg, f_m = inp.config, inp.explicit["f_m"]
     n = mesh.shell_conn.shape[0]
     cov = inp.case["covering"]
@@ -111,16 +115,22 @@ def shell_materials(mesh, inp: HifiInputs):
     if sel.any():
         own = {k: inp.case[k] for k in ("d_i", "d_o") if k in inp.case}   # e.g. the 15 mm tube
         cfg_cov = {**cfg, "coverings": {**cfg["coverings"], cov: {**cfg["coverings"][cov], **own}}}
+        layers = getattr(mesh, "info", {}).get("tube_layers", 1.0)   # a slit tube rolled onto the bundle
         if resultant:
+            if layers != 1.0:
+                raise ValueError(f"covering {cov}: wall_law resultant with hifi.build.tube_closure > 0 "
+                                 "(a slit tube rolled onto the bundle) is not modelled; use "
+                                 "wall_law isotropic or tube_closure 0")
             w = tube_wall_from_config(cfg_cov, cov, inp.coverings[cov])
             mat[sel] = wall_row(w, MAT_TUBE)
             thick[sel] = w["mass_thickness"]
             rho[sel] = w["rho"]
         else:
             eq = tube_equivalent(cfg_cov, cov, inp.coverings[cov])
-            mat[sel, :6] = [eq["E"], eq["nu"], eq["sigma_y"], eq["K"], eq["n"], 0.0]
+            m = layers          # m walls that slide on each other: m x the stresses and the mass
+            mat[sel, :6] = [m * eq["E"], eq["nu"], m * eq["sigma_y"], m * eq["K"], eq["n"], 0.0]
             thick[sel] = eq["t"]
-            rho[sel] = eq["rho"]
+            rho[sel] = m * eq["rho"]
     sel = mesh.shell_part == hm.PART_FABRIC
     if sel.any():
         fab = cfg["coverings"]["fabric_tube"]

@@ -245,7 +245,7 @@ def _info(case, res, taping, sample, bundle, cov, helix, phi_cut) -> dict:
         "x_tube": sample.x_tube, "taped_end": sample.a, "helix": helix,
     }
     if cov.kind == "tube":
-        info.update(tube_mid_radius=cov.R, tube_contact_thickness=cov.t,
+        info.update(tube_mid_radius=cov.R, tube_contact_thickness=cov.t, tube_layers=cov.layers,
                     tape_radius=float(cov.tape_radius(np.zeros(1))[0]),
                     cut_phi=(phi_cut if cov.cut else None))
     elif cov.kind == "fabric":

@@ -257,7 +257,26 @@ class Covering:
             self.d_i, self.d_o, self.wall = cov["d_i"], cov["d_o"], cov["t"]
             self.R = 0.25 * (self.d_i + self.d_o)
             self.t = 0.5 * (self.d_o - self.d_i)
+        self.layers = 1.0            # walls stacked in the shell (a slit tube rolled tighter)
         self.t_tape = t_tape
+
+    def close_onto(self, r_bundle: float, closure: float, clearance: float) -> None:
+        """Roll a slit tube tighter by the fraction ``closure`` of the way from its moulded
+        diameter to the bundle (inner face at ``r_bundle + clearance`` at 1), the ridge depth
+        kept.  Its lips then overlap: the wall's moulded circumference 2 pi R lies around the
+        smaller 2 pi R' as ``layers`` = R / R' walls (the shell's stiffness and mass scale
+        with it, :func:`harnesspipe.models.hifi_bundle.shell_materials`), and the section is
+        closed (``cut`` False).  0 leaves the tube as moulded, its slit free to open."""
+        if not 0.0 <= closure <= 1.0:
+            raise ValueError(f"tube_closure {closure}: expected a fraction in [0, 1]")
+        if self.kind != "tube" or not self.cut or closure == 0.0:
+            return
+        R0 = self.R
+        d_i = self.d_i - closure * (self.d_i - 2.0 * (r_bundle + clearance))
+        self.d_o, self.d_i = d_i + (self.d_o - self.d_i), d_i
+        self.R = 0.25 * (self.d_i + self.d_o)
+        self.layers = R0 / self.R
+        self.cut = False
 
     def spiral_radius(self, theta):
         """Fabric mid-surface r(theta) = r1 + (r2 - r1) theta / (2 pi wraps)."""
@@ -292,7 +311,9 @@ class Covering:
 
 def covering(case: dict, config: dict, bundle: WireBundle, t_tape: float) -> Covering:
     """The case's covering (config ``coverings``, the case's ``d_i``/``d_o`` override those
-    of a tube) around ``bundle``; ValueError if the bundle does not fit inside."""
+    of a tube) around ``bundle``, a slit tube closed onto it by config
+    ``hifi.build.tube_closure`` (:meth:`Covering.close_onto`); ValueError if the bundle does
+    not fit inside."""
     name = case["covering"]
     if name == "none":
         return Covering("none", {"r_bundle": bundle.r_bundle}, t_tape)
@@ -303,6 +324,8 @@ def covering(case: dict, config: dict, bundle: WireBundle, t_tape: float) -> Cov
         raise ValueError(f"{bundle.yz.shape[0]} wires (bundle radius {bundle.r_bundle:.3f}) do not "
                          f"fit in {name} (inner radius {cov.inner_min():.3f}); give the case a "
                          f"larger d_i/d_o")
+    closure = float(config.get("hifi", {}).get("build", {}).get("tube_closure", 0.0))
+    cov.close_onto(bundle.r_bundle, closure, WIRE_CLEARANCE * bundle.pitch)
     return cov
 
 
