@@ -132,6 +132,77 @@ def _blend_forces(x, a0, a1, b0, b1, dUdcos, f_n):
         f_n[b0, c] += dUdcos * gb
 
 
+@njit(cache=True)
+def _end_projection_grad(x, a0, ea, La, bx, g):
+    """Gradient of ``(x_bx - x_a0) . e_a`` (node bx projected on a's axis, in mm) with
+    respect to a0, a1, bx: rows 0, 1, 2 of ``g``."""
+    qe = 0.0
+    for c in range(3):
+        qe += (x[bx, c] - x[a0, c]) * ea[c]
+    for c in range(3):
+        q_perp = (x[bx, c] - x[a0, c]) - qe * ea[c]
+        g[0, c] = -ea[c] - q_perp / La
+        g[1, c] = q_perp / La
+        g[2, c] = ea[c]
+
+
+@njit(cache=True)
+def _overlap_forces(x, a0, a1, b0, b1, coef, f_n):
+    """Forces ``-coef grad w`` of the parallel rule's weight w = L_ov / (L_a + L_b)
+    (:func:`_segment_points`; ``coef`` = beta U_par / w): the pair's parallel energy
+    ``beta w sum 1/2 k_n g^2`` changes with the overlap L_ov as the segments slide along
+    each other, and this is the force of that change.  L_ov = hi - lo on a's axis (mm), each
+    end either a's own end (clamped: 0 or L_a) or one of b's nodes projected on a."""
+    ea = np.empty(3)
+    eb = np.empty(3)
+    La = Lb = 0.0
+    for c in range(3):
+        ea[c] = x[a1, c] - x[a0, c]
+        eb[c] = x[b1, c] - x[b0, c]
+        La += ea[c] * ea[c]
+        Lb += eb[c] * eb[c]
+    La = math.sqrt(La)
+    Lb = math.sqrt(Lb)
+    p0 = p1 = 0.0
+    for c in range(3):
+        ea[c] /= La
+        eb[c] /= Lb
+        p0 += (x[b0, c] - x[a0, c]) * ea[c]
+        p1 += (x[b1, c] - x[a0, c]) * ea[c]
+    b_lo, b_hi = (b0, b1) if p0 <= p1 else (b1, b0)
+    lo = max(0.0, min(p0, p1))
+    hi = min(La, max(p0, p1))
+    if hi <= lo:
+        return
+    L_sum = La + Lb
+    g_ov = np.zeros((4, 3))          # d L_ov / d (a0, a1, b_lo or b_hi's row 2/3)
+    g = np.empty((3, 3))
+    if max(p0, p1) >= La:            # hi = L_a
+        for c in range(3):
+            g_ov[0, c] -= ea[c]
+            g_ov[1, c] += ea[c]
+    else:
+        _end_projection_grad(x, a0, ea, La, b_hi, g)
+        for c in range(3):
+            g_ov[0, c] += g[0, c]
+            g_ov[1, c] += g[1, c]
+            g_ov[3, c] += g[2, c]
+    if min(p0, p1) > 0.0:            # lo = b_lo's projection, else 0
+        _end_projection_grad(x, a0, ea, La, b_lo, g)
+        for c in range(3):
+            g_ov[0, c] -= g[0, c]
+            g_ov[1, c] -= g[1, c]
+            g_ov[2, c] -= g[2, c]
+    r = (hi - lo) / (L_sum * L_sum)  # d w = d L_ov / L_sum - L_ov (d L_a + d L_b) / L_sum^2
+    for c in range(3):
+        f_n[a0, c] -= coef * (g_ov[0, c] / L_sum + r * ea[c])
+        f_n[a1, c] -= coef * (g_ov[1, c] / L_sum - r * ea[c])
+        f_n[b_lo, c] -= coef * g_ov[2, c] / L_sum
+        f_n[b_hi, c] -= coef * g_ov[3, c] / L_sum
+        f_n[b0, c] -= coef * r * eb[c]
+        f_n[b1, c] += coef * r * eb[c]
+
+
 @njit(cache=True, parallel=True)
 def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d_c, dt,
                       time_scale, hist_partner, hist_ft, f_n, f_t):
@@ -180,7 +251,7 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
     pfn = np.empty((n_act, WW_POINTS, 3))     # weighted normal force on a's point
     pft = np.empty((n_act, WW_POINTS, 3))     # weighted friction force on a's point
     hnew = np.empty((n_act, WW_POINTS, 3))    # new friction history (per unit weight)
-    pdu = np.empty(n_act)                     # (U_par - U_cross) beta' of the blend
+    pdu = np.empty((n_act, 2))                # (U_par - U_cross) beta', beta U_par / w
     dt_phys = dt * time_scale
     n_chunks = (n_act + CHUNK - 1) // CHUNK
     if n_chunks <= SERIAL_MAX_CHUNKS:
@@ -211,7 +282,7 @@ def beam_beam_contact_serial(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, 
     pfn = np.empty((n_act, WW_POINTS, 3))
     pft = np.empty((n_act, WW_POINTS, 3))
     hnew = np.empty((n_act, WW_POINTS, 3))
-    pdu = np.empty(n_act)
+    pdu = np.empty((n_act, 2))
     _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c, dt,
                dt * time_scale, hist_partner, hist_ft, 0, n_act, pfn, pft, hnew, pdu)
     _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner, hist_ft,
@@ -270,8 +341,10 @@ def _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner,
         a1 = seg[a, 1]
         b0 = seg[b, 0]
         b1 = seg[b, 1]
-        if pdu[j] != 0.0:
-            _blend_forces(x, a0, a1, b0, b1, pdu[j], f_n)
+        if pdu[j, 0] != 0.0:
+            _blend_forces(x, a0, a1, b0, b1, pdu[j, 0], f_n)
+        if pdu[j, 1] != 0.0:
+            _overlap_forces(x, a0, a1, b0, b1, pdu[j, 1], f_n)
         for k in range(WW_POINTS):
             if not (flag[p] >> k) & 1:
                 continue
@@ -370,8 +443,9 @@ def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag, pts):
 def _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c, dt,
                dt_phys, hist_partner, hist_ft, j0, j1, pfn, pft, hnew, pdu):
     """Normal and friction forces of the touching pairs idx[j0:j1] (compact arrays by j) at
-    their points ``pts`` (:func:`_ww_flags`); ``pdu[j]``: (U_par - U_cross) beta' for
-    :func:`_blend_forces`."""
+    their points ``pts`` (:func:`_ww_flags`); ``pdu[j, 0]``: (U_par - U_cross) beta' for
+    :func:`_blend_forces`, ``pdu[j, 1]``: beta U_par / w, the parallel energy per unit
+    weight, for :func:`_overlap_forces`."""
     scr = np.zeros((4, 3))
     for j in range(j0, j1):
         p = idx[j]
@@ -441,7 +515,8 @@ def _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_
             rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew[j, k], ds)
             for c in range(3):
                 pft[j, k, c] = -w * hnew[j, k, c]
-        pdu[j] = (u_par - u_cross) * bl[1]
+        pdu[j, 0] = (u_par - u_cross) * bl[1]
+        pdu[j, 1] = beta * u_par / wv[1] if (m & 6) and wv[1] > 0.0 else 0.0
         # a rule not in use hands its points the other's stick force (no loss at a switch)
         if m == 1:
             for c in range(3):
