@@ -145,3 +145,23 @@ def test_report_says_when_the_y_harness_has_not_run_yet(tmp_path):
     cfg = cfgmod.load(overrides={"profile": "default"})
     text = branch_hifi_section(tmp_path, cfg)
     assert "Not run yet" in text and "Not part of" not in text and "branch_hifi_all" in text
+
+
+def test_the_crosshead_pulls_at_the_tests_rate_in_physical_time(inp, mesh):
+    """Past its ramp the crosshead moves at the test's 1 mm/s (Sec. 2.3: 50 mm at 1 mm/s) in
+    the physical time eq. 6 sees, and ends the run at the full stroke, at rest from there."""
+    system = hb.YSystem(mesh, inp, G, "inplane", 50.0)
+    rate = 50.0 / inp.explicit["t_phys"]
+    ramp = system.ramp
+    assert ramp == inp.config["hifi"]["explicit"]["rate_ramp"] and rate == pytest.approx(1.0)
+    for x in (ramp, 0.5, 0.99):
+        dt = 1e-6 * system.T
+        system._move_loading(x * system.T)
+        d0 = system.displacement()
+        system._move_loading(x * system.T + dt)
+        v_model = (system.displacement() - d0) / dt
+        assert v_model / system.time_scale == pytest.approx(rate, rel=1e-6)
+    system._move_loading(system.T)
+    assert system.displacement() == pytest.approx(50.0, rel=1e-12)
+    system._move_loading(1.5 * system.T)
+    assert system.displacement() == pytest.approx(50.0, rel=1e-12)
