@@ -537,6 +537,8 @@ def test_hifi_report_section(tmp_path, fake):
         (step / "curve.csv").write_text("case,deflection_mm,force_N\n")
     page = hifi_section(tmp_path, cfg, _measured_by_case([ref]))
     assert "virtual test: 19 x type 2, closed tube (cwb19_t2_closed)" in page and "Calibrated interface" in page
+    for key in cfg["hifi"]["build"]:        # the build inputs the chain does not fit: their config value
+        assert f"<td>{key}</td>" in page
     assert "Cost" in page
     assert page.count("data:image/png;base64,") >= 2 and "281 min" in page
     cohesive = page.index("Calibration step cohesive")

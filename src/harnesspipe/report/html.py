@@ -620,12 +620,15 @@ def _interface_table(root: Path, fits: list[Path], cfg: dict) -> str:
     pi = cfg.get("paper", {}).get("interface", {})
     guess = {**cfg.get("hifi", {}).get("parameters", {}), **cfg.get("hifi", {}).get("build", {})}
     names = list(HIFI_INTERFACE) + [k for k in fitted if k not in HIFI_INTERFACE]   # build state
+    names += [k for k in cfg.get("hifi", {}).get("build", {}) if k not in names]     # kept, not fitted
     rows = [[k, fitted.get(k, ""), guess.get(k, ""), pi.get(k, ""), _rel(fitted.get(k), pi.get(k))]
             for k in names]
     src = "results/hifi/interface.csv" if iface.exists() else "chain fits so far (interface.csv not written yet)"
     return (f"<h3>Calibrated interface (Sec. 4.2) and build state</h3><p>From <code>{html.escape(src)}</code>; "
             "the build state (end_tape_layers: wraps of the end bands; tape_tension: the tape's "
-            "wrapping tension, N) is not in the paper.</p>"
+            "wrapping tension, N; wire_fill: the wires spread in the covering; tube_closure: a slit "
+            "tube rolled onto its bundle) is not in the paper; a build input without a calibrated "
+            "value keeps its config value (initial guess).</p>"
             + _table(["parameter", "calibrated", "initial guess", "paper (Sec. 4.2)", "difference"], rows))
 
 
