@@ -119,6 +119,11 @@ def test_closed_slit_tube_is_its_layers_of_wall():
     np.testing.assert_array_equal(mat1[tape1][0], mat0[tape0][0])
     with pytest.raises(ConfigError, match="tube_closure=1.2: expected a fraction"):
         inputs(cfg, "cwb19_t2_open_coarse", {"tube_closure": "1.2"})
+    resultant = load()
+    resultant["coverings"]["open_tube"]["wall_law"] = "resultant"
+    walls = inputs(resultant, "cwb19_t2_open_coarse", {"tube_closure": "1"})
+    with pytest.raises(ValueError, match="wall_law resultant with hifi.build.tube_closure > 0"):
+        shell_materials(hm.build_mesh(walls.case, walls.config, "quick"), walls)
 
 
 def test_corrugation_pitch_is_a_set_key_of_the_tubes():
