@@ -201,6 +201,24 @@ def test_parallel_wires_equal_split_no_jitter():
             assert np.allclose(fn[6:9, 2], k_n * pen) and np.allclose(fn[[5, 9], 2], k_n * pen / 2)
 
 
+def _ww_loop_work(path, n=4000):
+    """Work of the wire-wire contact forces (trapezoidal) on two segments whose four nodes
+    follow ``path(theta)`` around theta in [0, 2 pi], and the sum of its steps' magnitudes."""
+    W = scale = 0.0
+    x0 = f0 = None
+    for th in np.linspace(0.0, 2 * np.pi, n + 1):
+        x = path(th)
+        hp, hf = new_slot_history(2, 8, WW_POINTS)
+        f = _bb(x, _z(4), np.array([[0, 1], [2, 3]]), np.array([[0, 1]]), np.array([0, 1]),
+                hp, hf)[1][:, :3]
+        if f0 is not None:
+            dW = 0.5 * np.sum((f0 + f) * (x - x0))
+            W += dW
+            scale += abs(dW)
+        x0, f0 = x, f
+    return W, scale
+
+
 def test_wire_wire_energy_continuous_between_crossing_and_parallel_rules():
     """A penetrating segment turning (in a plane parallel to its partner's) through the
     angles where the crossing rule hands over to the parallel rule, while its penetration
@@ -213,25 +231,9 @@ def test_wire_wire_energy_continuous_between_crossing_and_parallel_rules():
         cb = np.array([5.5, 0.3, 2 * R_W - pen])
         return np.array([[0, 0, 0], [8.0, 0, 0], cb - d, cb + d])
 
-    def loop_work(phi_mid, dphi, n=4000):
-        W = scale = 0.0
-        x0 = path(0.0, phi_mid, dphi)
-        f0 = None
-        for th in np.linspace(0.0, 2 * np.pi, n + 1):
-            x = path(th, phi_mid, dphi)
-            hp, hf = new_slot_history(2, 8, WW_POINTS)
-            f = _bb(x, _z(4), np.array([[0, 1], [2, 3]]), np.array([[0, 1]]), np.array([0, 1]),
-                    hp, hf)[1][:, :3]
-            if f0 is not None:
-                dW = 0.5 * np.sum((f0 + f) * (x - x0))
-                W += dW
-                scale += abs(dW)
-            x0, f0 = x, f
-        return W, scale
-
     for phi_mid, dphi, tol in ((8.5, 5.0, 5e-3),     # |cos| 0.973..0.9986: through the blend
                                (20.0, 5.0, 1e-12)):  # crossing rule only: exact potential
-        W, scale = loop_work(phi_mid, dphi)
+        W, scale = _ww_loop_work(lambda th: path(th, phi_mid, dphi))
         assert scale > 0.1
         assert abs(W) < tol * scale
 
@@ -249,18 +251,7 @@ def test_parallel_wires_sliding_past_each_other_make_no_energy():
         return np.array([[0, 0, 0], [8.0, 0, 0], [xo, 0.2, 2 * R_W - pen0],
                          [xo + 8.0, 0.2, 2 * R_W - pen1]])
 
-    W = scale = 0.0
-    x0 = f0 = None
-    for th in np.linspace(0.0, 2 * np.pi, 4001):
-        x = path(th)
-        hp, hf = new_slot_history(2, 8, WW_POINTS)
-        f = _bb(x, _z(4), np.array([[0, 1], [2, 3]]), np.array([[0, 1]]), np.array([0, 1]),
-                hp, hf)[1][:, :3]
-        if f0 is not None:
-            dW = 0.5 * np.sum((f0 + f) * (x - x0))
-            W += dW
-            scale += abs(dW)
-        x0, f0 = x, f
+    W, scale = _ww_loop_work(path)
     assert scale > 0.01
     assert abs(W) < 1e-5 * scale
 
