@@ -147,14 +147,16 @@ def _end_projection_grad(x, a0, ea, La, bx, g):
 
 
 @njit(cache=True)
-def _overlap_forces(x, a0, a1, b0, b1, coef, f_n):
+def _overlap_forces(x, a0, a1, b0, b1, coef, f_n, scr):
     """Forces ``-coef grad w`` of the parallel rule's weight w = L_ov / (L_a + L_b)
     (:func:`_segment_points`; ``coef`` = beta U_par / w): the pair's parallel energy
     ``beta w sum 1/2 k_n g^2`` changes with the overlap L_ov as the segments slide along
     each other, and this is the force of that change.  L_ov = hi - lo on a's axis (mm), each
-    end either a's own end (clamped: 0 or L_a) or one of b's nodes projected on a."""
-    ea = np.empty(3)
-    eb = np.empty(3)
+    end either a's own end (clamped: 0 or L_a) or one of b's nodes projected on a.
+    ``scr``: (9, 3) scratch (rows: e_a, e_b, d L_ov / d (a0, a1, b_lo, b_hi), a projection's
+    gradient)."""
+    ea = scr[0]
+    eb = scr[1]
     La = Lb = 0.0
     for c in range(3):
         ea[c] = x[a1, c] - x[a0, c]
@@ -175,8 +177,9 @@ def _overlap_forces(x, a0, a1, b0, b1, coef, f_n):
     if hi <= lo:
         return
     L_sum = La + Lb
-    g_ov = np.zeros((4, 3))          # d L_ov / d (a0, a1, b_lo or b_hi's row 2/3)
-    g = np.empty((3, 3))
+    g_ov = scr[2:6]                  # d L_ov / d (a0, a1, b_lo, b_hi)
+    g_ov[...] = 0.0
+    g = scr[6:9]
     if max(p0, p1) >= La:            # hi = L_a
         for c in range(3):
             g_ov[0, c] -= ea[c]
@@ -325,6 +328,7 @@ def _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner,
     for i in range(hist_partner.shape[0]):
         for s in range(hist_partner.shape[1]):
             hist_partner[i, s] = -1
+    scr = np.empty((9, 3))               # :func:`_overlap_forces`' scratch, once per call
     for j in range(idx.size):
         p = idx[j]
         a = pairs[p, 0]
@@ -344,7 +348,7 @@ def _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner,
         if pdu[j, 0] != 0.0:
             _blend_forces(x, a0, a1, b0, b1, pdu[j, 0], f_n)
         if pdu[j, 1] != 0.0:
-            _overlap_forces(x, a0, a1, b0, b1, pdu[j, 1], f_n)
+            _overlap_forces(x, a0, a1, b0, b1, pdu[j, 1], f_n, scr)
         for k in range(WW_POINTS):
             if not (flag[p] >> k) & 1:
                 continue
