@@ -1,9 +1,10 @@
 """Nodes (the wires' nodes as spheres) on bilinear shell quads (tube, tape), Sec. 4.1:
 one-sided penalty contact with the rate-dependent friction of eq. 6.
 
-Each node contacts at most its closest facet of a set; pairs whose node is far from
-the quad's box are rejected before the projection (:func:`_nf_project`).  Conventions:
-:mod:`harnesspipe.fe.contact.common`.
+Each node's gap to a set is the soft minimum of its distances to the set's facets (width
+SOFTMIN_TAU), its normal force the gradient of the penalty energy, its friction acts on
+its closest facet; pairs whose node is far from the quad's box are rejected before the
+projection (:func:`_nf_project`).  Conventions: :mod:`harnesspipe.fe.contact.common`.
 """
 from __future__ import annotations
 
@@ -18,6 +19,8 @@ from harnesspipe.fe.contact.surface import project_quad
 from harnesspipe.fe.materials.friction import rate_dependent_friction
 
 ENTRY_FRACTION = 0.05   # a contact begins at most this far (x (r + t/2)) inside the surface
+SOFTMIN_TAU = 0.002     # mm: width of the soft minimum of a node's facet distances
+SOFTMIN_REACH = 40.0    # facets farther than this x SOFTMIN_TAU beyond the closest: weight < 5e-18
 
 
 @njit(cache=True, parallel=True)
@@ -42,16 +45,27 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
         (``new_slot_history(n_cn, maxs)``).
     f_n, f_t : outputs, ADDED.  The node receives F, the quad nodes -F N_i(xi, eta).
 
-    Gap: distance of the node centre to the CLOSEST POINT of the facets' mid-surfaces
+    Gap: the distance of the node centre to the CLOSEST POINT of each facet's mid-surface
     (Gauss-Newton projection clamped to the quad, so that at edges and corners the closest
-    point lies on the boundary), minus r + t/2.  Each node contacts at most its closest
-    facet of the set: the distance to a polyhedral surface is continuous and its gradient is
-    the unit vector to the closest point, so the penalty energy 1/2 k gap^2 is a potential
-    -- the contact is conservative also where a node slides over a convex kink (under the
-    loading pin the tube folds towards the wires), where a projection-along-normal rule
-    has a dead zone of width ~ 2 (r + t/2) tan(kink/2) through which nodes sink and then
-    get pushed out with energy that was never stored.  The force direction is the unit
-    vector from the closest point to the node (the facet normal inside a facet); a node
+    point lies on the boundary) less t/2, h_q, reduced over the node's facets to the soft
+    minimum g = h_min - tau ln sum_q exp(-(h_q - h_min) / tau) (tau = SOFTMIN_TAU), minus r.
+    The distance to a polyhedral surface is continuous and its gradient is the unit vector
+    to the closest point, so the penalty energy 1/2 k gap^2 is a potential -- the contact is
+    conservative also where a node slides over a convex kink (under the loading pin the tube
+    folds towards the wires), where a projection-along-normal rule has a dead zone of width
+    ~ 2 (r + t/2) tan(kink/2) through which nodes sink and then get pushed out with energy
+    that was never stored.  The hard minimum (the closest facet alone) is kinked where two
+    facets are equally close at a CONCAVE corner (a wire pressed into a node line of the
+    faceted tube): its force flips there by 2 k pen sin(half the kink), nodes chattered
+    across, and the explicit step made energy that the tie dashpots and friction then took
+    up (a 10 mm run of the closed-on open tube: contact -10.3 N mm, i.e. made, and the
+    ties' dashpots 9.4 N mm; with the soft minimum +1.7 and 0.6).  The soft minimum is
+    smooth; it lowers the gap by tau ln m where m facets are equally close (a seam of a flat
+    sheet: tau ln 2).  The normal force on the node is k pen sum_q w_q n_q / sum_q w_q
+    (weights w_q = exp(-(h_q - h_min) / tau), n_q the unit vector from facet q's closest
+    point to the node, the facet normal inside a facet), each facet taking its share at its
+    closest point; friction acts against the slip on the closest facet, in the plane normal
+    to the weighted normal, limited by that normal force.  A node
     already behind the mid-surface (side test ``quad_sign * n . d < 0``) over the facet's
     interior is pushed along the facet normal, up to the penetration ``pen_max``, provided it
     was in contact with the set at the previous step (``hist_partner[i, 0] >= 0``: it went in
@@ -64,9 +78,9 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
     measured as 9 N mm made in one step by the fabric's overlap self-contact.  Without the history rule a
     node beside a FREE edge of the set and behind its plane (the next fabric layer of a spiral
     where the set's quads stop) met its whole penetration at once when it slid over the facet,
-    and was pushed out with energy never stored.  Limitation: one contact per node and
-    set, so a node pinched between two opposite walls of the same set (a tube flattened
-    below one wire diameter) only sees the nearer one.
+    and was pushed out with energy never stored.  Limitation: one gap per node and set, so a
+    node pinched between two opposite walls of the same set (a tube flattened below one wire
+    diameter) only sees the nearer one.
     Returns the number of active contacts.
     """
     n_pairs = pairs.shape[0]
@@ -106,19 +120,14 @@ def node_facet_contact_serial(x, v, nodes, node_r, quads, quad_t, quad_sign, pai
 def _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu_k, d_c, dt,
                dt_phys, pen_max, hist_partner, hist_ft, f_n, f_t):
     """The serial end of the node-facet contact, from the projections ``pd`` of the pairs
-    (:func:`_nf_project`): each node's closest facet, its force, friction and history."""
-    n_pairs = pairs.shape[0]
+    (:func:`_nf_project`): each node's soft-minimum gap, its forces (the gradient of the
+    penalty energy), friction on its dominant facet and its history."""
     n_cn = nodes.shape[0]
-    # closest facet per node (pairs are grouped by node); behind a facet only a node that was
-    # in contact at the previous step (it went in from the front)
-    best = np.full(n_cn, -1, dtype=np.int64)
-    for p in range(n_pairs):
-        i = pairs[p, 0]
-        if not np.isfinite(pd[p, 2]) or (pd[p, 2] < 0.0 and hist_partner[i, 0] < 0):
-            continue
-        b = best[i]
-        if b < 0 or abs(pd[p, 2]) < abs(pd[b, 2]):
-            best[i] = p
+    was_in = np.empty(n_cn, dtype=np.bool_)
+    for i in range(n_cn):
+        was_in[i] = hist_partner[i, 0] >= 0
+    h_min, dom, w_sum, n_sum = _nf_softmin(pairs, pd, quad_t, was_in)
+    pn_w = np.zeros(n_cn)        # p_n / (sum of the weights) of each node in contact
     # node by node: each row of the history is read (old slot) before it is rewritten, so
     # the history is updated in place (no copies)
     maxs = hist_partner.shape[1]
@@ -130,27 +139,24 @@ def _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu
     N = np.empty(4)
     n_active = 0
     for i in range(n_cn):
-        p = best[i]
+        p = dom[i]
         q = pairs[p, 1] if p >= 0 else -1
-        gap = pd[p, 2] - node_r[i] - 0.5 * quad_t[q] if p >= 0 else 0.0
-        entering = hist_partner[i, 0] < 0
+        gap = h_min[i] - SOFTMIN_TAU * math.log(w_sum[i]) - node_r[i] if p >= 0 else 0.0
         if (p < 0 or gap >= 0.0 or -gap > pen_max
-                or (entering and -gap > ENTRY_FRACTION * (node_r[i] + 0.5 * quad_t[q]))):
+                or (not was_in[i] and -gap > ENTRY_FRACTION * (node_r[i] + 0.5 * quad_t[q]))):
             for s in range(maxs):
                 hist_partner[i, s] = -1
             continue
         nd = nodes[i]
         n_active += 1
-        xi = pd[p, 0]
-        eta = pd[p, 1]
-        N[0] = 0.25 * (1 - xi) * (1 - eta)
-        N[1] = 0.25 * (1 + xi) * (1 - eta)
-        N[2] = 0.25 * (1 + xi) * (1 + eta)
-        N[3] = 0.25 * (1 - xi) * (1 + eta)
         pn = -k_n * gap
+        pn_w[i] = pn / w_sum[i]
+        n_len = math.sqrt(n_sum[i, 0] ** 2 + n_sum[i, 1] ** 2 + n_sum[i, 2] ** 2)
         for c in range(3):
-            nv[c] = pd[p, 3 + c]
+            nv[c] = n_sum[i, c] / n_len if n_len > 0.0 else pd[p, 3 + c]
             hnew[c] = 0.0
+            f_n[nd, c] += pn_w[i] * n_sum[i, c]
+        _bilinear_weights(pd[p, 0], pd[p, 1], N)
         if k_t > 0.0:
             slot = find_slot(hist_partner, quads, i, q)
             for c in range(3):
@@ -160,7 +166,8 @@ def _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu
                     vq += N[m] * v[quads[q, m], c]
                 dg[c] = dt * (v[nd, c] - vq)
             to_tangent_plane(fold, dg, nv)
-            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew, ds)
+            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn_w[i] * n_len,
+                                    hnew, ds)
         for s in range(maxs):
             hist_partner[i, s] = -1
         hist_partner[i, 0] = q              # in contact (also read by the behind-facet rule)
@@ -168,21 +175,86 @@ def _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu
             for c in range(3):
                 hist_ft[i, 0, c] = hnew[c]
         for c in range(3):
-            fnc = pn * nv[c]
-            ftc = -hnew[c]
-            f_n[nd, c] += fnc
-            f_t[nd, c] += ftc
+            f_t[nd, c] -= hnew[c]
             for m in range(4):
-                f_n[quads[q, m], c] -= N[m] * fnc
-                f_t[quads[q, m], c] -= N[m] * ftc
+                f_t[quads[q, m], c] += N[m] * hnew[c]
+    # the facets' reactions: each pair's share of the normal force at its closest point
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        if pn_w[i] == 0.0:
+            continue
+        w = _nf_weight(pd, quad_t, was_in, pairs, p, h_min[i])
+        if w == 0.0:
+            continue
+        _bilinear_weights(pd[p, 0], pd[p, 1], N)
+        q = pairs[p, 1]
+        for c in range(3):
+            fc = pn_w[i] * w * pd[p, 3 + c]
+            for m in range(4):
+                f_n[quads[q, m], c] -= N[m] * fc
     return n_active
+
+
+@njit(cache=True)
+def _nf_softmin(pairs, pd, quad_t, was_in):
+    """Each node's distances to its facets' surfaces h_p = dist_p - t_q / 2 reduced to the
+    soft minimum h_min - SOFTMIN_TAU ln(sum_p exp(-(h_p - h_min) / SOFTMIN_TAU)): returns
+    h_min, the dominant (closest) pair, the sum of the weights and the weighted sum of the
+    pairs' force directions.  A pair behind its facet counts only for a node that was in
+    contact at the previous step (``was_in``)."""
+    n_cn = was_in.shape[0]
+    h_min = np.full(n_cn, np.inf)
+    dom = np.full(n_cn, -1, dtype=np.int64)
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        if _nf_counts(pd, was_in, i, p):
+            h = pd[p, 2] - 0.5 * quad_t[pairs[p, 1]]
+            if h < h_min[i]:
+                h_min[i] = h
+                dom[i] = p
+    w_sum = np.zeros(n_cn)
+    n_sum = np.zeros((n_cn, 3))
+    for p in range(pairs.shape[0]):
+        i = pairs[p, 0]
+        w = _nf_weight(pd, quad_t, was_in, pairs, p, h_min[i])
+        if w == 0.0:
+            continue            # pd's directions are not written for such a pair
+        w_sum[i] += w
+        for c in range(3):
+            n_sum[i, c] += w * pd[p, 3 + c]
+    return h_min, dom, w_sum, n_sum
+
+
+@njit(cache=True, inline="always")
+def _nf_counts(pd, was_in, i, p):
+    """Pair p (of node i) takes part: projected, and in front of its facet or the node was
+    in contact at the previous step (it went in from the front)."""
+    return np.isfinite(pd[p, 2]) and (pd[p, 2] >= 0.0 or was_in[i])
+
+
+@njit(cache=True, inline="always")
+def _nf_weight(pd, quad_t, was_in, pairs, p, h_min):
+    """Soft-minimum weight exp(-(h_p - h_min) / SOFTMIN_TAU) of pair p, 0 for a pair that
+    does not take part (:func:`_nf_counts`)."""
+    if not _nf_counts(pd, was_in, pairs[p, 0], p):
+        return 0.0
+    return math.exp(-(pd[p, 2] - 0.5 * quad_t[pairs[p, 1]] - h_min) / SOFTMIN_TAU)
+
+
+@njit(cache=True, inline="always")
+def _bilinear_weights(xi, eta, N):
+    """The bilinear shape functions of a quad at (xi, eta) into N (4,)."""
+    N[0] = 0.25 * (1 - xi) * (1 - eta)
+    N[1] = 0.25 * (1 + xi) * (1 - eta)
+    N[2] = 0.25 * (1 + xi) * (1 + eta)
+    N[3] = 0.25 * (1 - xi) * (1 + eta)
 
 
 @njit(cache=True, inline="always")
 def _nf_reach(r, t_max, pen_max):
     """Largest |distance| of a node (radius r) from a facet it can be in contact with (see
     :func:`_nf_project`), with the slack of the early rejects."""
-    return max(r + 0.5 * t_max, pen_max - r) * (1.0 + REJECT_TOL)
+    return max(r + 0.5 * t_max + SOFTMIN_REACH * SOFTMIN_TAU, pen_max - r) * (1.0 + REJECT_TOL)
 
 
 @njit(cache=True)
@@ -225,11 +297,12 @@ def _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, p0, p
 
     Early reject: a pair whose node is farther from the bounding box of the quad's nodes
     (which holds the bilinear facet, so the box distance bounds |dist| from below) than
-    ``T = max(r + t_max/2, pen_max - r)`` gets pd = inf.  Any contact has
-    |dist| <= T (in front: |dist| < r + t/2; behind: |dist| + r + t/2 <= pen_max), so
-    if a node's closest facet is in contact it is not rejected and every rejected pair is
-    farther (the choice of the closest facet is unchanged), and if it is rejected no pair
-    of the node can be in contact: the result is unchanged.
+    ``T = max(r + t_max/2 + SOFTMIN_REACH tau, pen_max - r)`` gets pd = inf.  Any contact
+    has |dist| <= T (in front: |dist| < r + t/2; behind: |dist| + r + t/2 <= pen_max), and
+    so has every facet of a node in contact whose soft-minimum weight exceeds
+    exp(-SOFTMIN_REACH) (its h within SOFTMIN_REACH tau of h_min < r), so if a node is in
+    contact its closest facet and every facet of non-negligible weight are kept, and if it
+    is rejected no pair of the node can be in contact: the result is unchanged.
     """
     prj = np.zeros(8)
     for p in range(p0, p1):
