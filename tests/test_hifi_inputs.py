@@ -75,7 +75,7 @@ def test_build_state_keys_reach_the_run():
     with pytest.raises(ConfigError, match="end_tape_layers=0.5: expected a number of wraps"):
         inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "0.5"})
     assert inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "2.5"}).config["hifi"]["build"] == {
-        "wire_fill": 0.0, "tube_closure": 0.0, "end_tape_layers": 2.5, "tape_tension": 0.0}
+        "wire_fill": 0.0, "tube_closure": 1.0, "end_tape_layers": 2.5, "tape_tension": 0.0}
 
 
 def test_end_tape_layers_thicken_the_end_bands_only():
