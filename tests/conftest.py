@@ -25,6 +25,11 @@ def bilinear(u, k=0.8, u_y=3.0, k2=0.1):
     return np.where(u < u_y, k * u, k * u_y + k2 * (u - u_y))
 
 
+def with_closure(config: dict, c: float) -> dict:
+    """``config`` with ``hifi.build.tube_closure`` c (0: the slit tubes as moulded)."""
+    return {**config, "hifi": {**config["hifi"], "build": {**config["hifi"]["build"], "tube_closure": c}}}
+
+
 def pytest_collection_modifyitems(session, config, items):
     """The end-to-end pipeline files first (a stable sort): under ``make test``'s two
     workers (pytest-xdist, a file at a time) the longest file then runs beside the others

@@ -6,6 +6,8 @@ import itertools
 import numpy as np
 import pytest
 
+from conftest import with_closure
+
 from harnesspipe.models.hifi_mesh import (GROUP_COVERING, GROUP_END_LEFT, GROUP_HELIX, PART_FABRIC,
                                           PART_TAPE, PART_TUBE, PRESETS, TIE_COVERING, TIE_TAPE,
                                           TIE_WIRES, build_mesh, coverage, element_sizes,
@@ -14,15 +16,11 @@ from harnesspipe.models.hifi_mesh import (GROUP_COVERING, GROUP_END_LEFT, GROUP_
 RES = PRESETS["quick"]
 
 
-def _moulded(config):
-    """The slit tubes as moulded (``hifi.build.tube_closure`` 0): the geometry of eq. 5 checked
-    here; the default closure, which rolls them onto the bundle, in test_hifi_mesh_parts."""
-    return {**config, "hifi": {**config["hifi"], "build": {**config["hifi"]["build"], "tube_closure": 0.0}}}
-
-
 @pytest.fixture(scope="module")
 def meshes(config):
-    moulded = _moulded(config)
+    """The slit tubes as moulded (tube_closure 0): the geometry of eq. 5 checked here; the
+    default closure, which rolls them onto the bundle, in test_hifi_mesh_parts."""
+    moulded = with_closure(config, 0.0)
     return {name: build_mesh(case, moulded, RES) for name, case in config["cases"].items()}
 
 
@@ -204,7 +202,7 @@ def test_halflap_back_half_over_previous_wrap(config):
     """Every TIE_TAPE node has a node of another wrap at the same (x, phi), t_tape (0.1)
     radially below it (t/2 at the stepped centre line and back edge), at both resolutions."""
     for res in (RES, "default"):
-        m = build_mesh(config["cases"]["cwb19_t2_open_halflap"], _moulded(config), res)
+        m = build_mesh(config["cases"]["cwb19_t2_open_halflap"], with_closure(config, 0.0), res)
         top = m.X[m.tie_nodes[m.tie_target == TIE_TAPE]]
         below = m.X[np.unique(m.shell_conn[m.shell_group == GROUP_HELIX])]
         same = (np.abs(top[:, None, 0] - below[None, :, 0]) < 1e-9) & \

@@ -7,6 +7,8 @@ import itertools
 import numpy as np
 import pytest
 
+from conftest import with_closure
+
 from harnesspipe.models import hifi_mesh_parts as mp
 from harnesspipe.models.hifi_mesh import PRESETS, build_mesh
 
@@ -134,8 +136,6 @@ def test_bundle_that_does_not_fit_is_refused(config, sample):
     assert cov.R == pytest.approx(8.35) and cov.t == pytest.approx(1.7)
 
 
-def _closure(config, c):
-    return {**config, "hifi": {**config["hifi"], "build": {**config["hifi"]["build"], "tube_closure": c}}}
 
 
 @pytest.mark.parametrize("c", [0.5, 1.0])
@@ -146,25 +146,25 @@ def test_slit_tube_closes_onto_the_bundle_keeping_its_wall(config, sample, c):
     closed.  A closed tube and c = 0 leave the tube as moulded."""
     case = _case(config, "cwb19_t2_open_coarse")
     bundle = mp.wire_bundle(case, config)
-    moulded = mp.covering(case, _closure(config, 0.0), bundle, sample.t_tape)
-    cov = mp.covering(case, _closure(config, c), bundle, sample.t_tape)
+    moulded = mp.covering(case, with_closure(config, 0.0), bundle, sample.t_tape)
+    cov = mp.covering(case, with_closure(config, c), bundle, sample.t_tape)
     assert moulded.cut and moulded.layers == 1.0 and moulded.d_i == 10.7
     r_in = bundle.r_bundle + mp.WIRE_CLEARANCE * bundle.pitch
     assert 0.5 * cov.d_i == pytest.approx(0.5 * 10.7 - c * (0.5 * 10.7 - r_in))
     assert cov.d_o - cov.d_i == pytest.approx(14.1 - 10.7)
     assert cov.layers * cov.R == pytest.approx(moulded.R) and cov.layers > 1.0
     assert not cov.cut
-    closed = mp.covering(_case(config, "cwb19_t2_closed"), _closure(config, c), bundle, sample.t_tape)
+    closed = mp.covering(_case(config, "cwb19_t2_closed"), with_closure(config, c), bundle, sample.t_tape)
     assert closed.d_i == 10.7 and closed.layers == 1.0
     with pytest.raises(ValueError, match="tube_closure 1.5"):
-        mp.covering(case, _closure(config, 1.5), bundle, sample.t_tape)
+        mp.covering(case, with_closure(config, 1.5), bundle, sample.t_tape)
 
 
 def test_closed_slit_tube_mesh_has_no_cut_and_sits_on_the_bundle(config):
     """build_mesh with the slit tube closed: no cut node pairs, the clearance is the packing
     clearance, the pins touch the smaller tube, info carries the layers."""
     case = _case(config, "cwb19_t2_open_coarse")
-    m0, m1 = build_mesh(case, _closure(config, 0.0), RES), build_mesh(case, _closure(config, 1.0), RES)
+    m0, m1 = build_mesh(case, with_closure(config, 0.0), RES), build_mesh(case, with_closure(config, 1.0), RES)
     assert m0.cut_pairs.shape[0] > 0 and m1.cut_pairs.shape[0] == 0
     assert m0.info["tube_layers"] == 1.0 and m1.info["tube_layers"] == pytest.approx(6.2 / m1.info["tube_mid_radius"])
     assert m1.info["clearance"] == pytest.approx(mp.WIRE_CLEARANCE * m1.info["wire_pitch"])
@@ -173,7 +173,7 @@ def test_closed_slit_tube_mesh_has_no_cut_and_sits_on_the_bundle(config):
 
 @pytest.mark.parametrize("name, cut", [("cwb19_t2_closed", False), ("cwb19_t2_open_coarse", True)])
 def test_tube_nodes_lie_on_the_mid_surface(config, sample, name, cut):
-    _, cov = _bundle_and_covering(_closure(config, 0.0), sample, name)
+    _, cov = _bundle_and_covering(with_closure(config, 0.0), sample, name)
     xc = np.linspace(*sample.x_tube, 5)
     part = mp.tube_shell(cov, xc, 12, 0.5 * np.pi)
     assert cov.cut == cut
@@ -268,7 +268,7 @@ def test_end_band_profile_steps_at_the_tube_end(sample):
 
 def _helix(config, sample, name, taping_ratio, res):
     """The helix on the moulded tube (tube_closure 0: eq. 5's r = 7.1)."""
-    bundle, cov = _bundle_and_covering(_closure(config, 0.0), sample, name)
+    bundle, cov = _bundle_and_covering(with_closure(config, 0.0), sample, name)
     p = sample.w_tape * config["three_point"][taping_ratio]
     return (*mp.helix_strip(cov, sample, p, taping_ratio == "halflap_overlap", res), cov, bundle)
 
