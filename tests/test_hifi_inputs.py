@@ -11,7 +11,8 @@ from harnesspipe.config import ConfigError, load
 from harnesspipe.models.hifi import three_point
 from harnesspipe.stages.hifi import inputs
 
-STOP_MM = 12.0     # past a third of the stroke (the KE/IE check's start), ~40 % of a run
+STOP_MM = 10.0     # a third of the stroke, where the KE/IE check starts: the check reads the row
+                   # that ends there (before, it read the rows' mean travel and found none: KE/IE inf)
 
 
 def _run(case: str, **overrides):

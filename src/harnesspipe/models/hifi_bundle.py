@@ -66,9 +66,11 @@ def quasi_static_ratio(history, stroke: float, start: float = KE_IE_FROM,
     kinetic energy of the bundle and its overhangs follows the feeder speed, so the ratio
     diverges as the deflection goes to zero.  It is therefore checked over the part of
     the test that the calibrations use for the hardening and friction response (from a
-    third of the stroke); the full history (energies.csv) shows the early ratio too.
+    third of the stroke); the full history (energies.csv) shows the early ratio too.  A run
+    stopped right at that point has its last row there up to rounding: rows within 1e-9 of
+    the stroke below it count.
     """
-    late = history[history[travel] >= start * stroke]
+    late = history[history[travel] >= (start - 1e-9) * stroke]
     ie = late["internal"].to_numpy()
     ke = late["KE"].to_numpy()
     ok = ie > 0.0
