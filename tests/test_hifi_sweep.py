@@ -3,10 +3,11 @@
 The chain (workflow/rules/hifi.smk) fits mu_rtb and mu_rtp in ``hifi.pipeline.mu_bounds``,
 E2/E1 in ``E2_bounds`` and the cohesive (delta0, delta_f, alpha_d) by a simplex from
 their start values; the virtual tests then run every case at what it found.  At the quick
-profile, every case the pipeline runs is run at the lower and upper bounds and at the
-midpoints -- the cohesive parameters at the paper's values (Sec. 4.2.1, the most brittle
-bond the chain meets), at the start values and midway -- and each run must pass its energy
-balance and quasi-static checks (``config.explicit``), which :func:`three_point` raises on.
+profile, every case the pipeline runs is run at the lower and at the upper bounds -- the
+cohesive parameters at the paper's values (Sec. 4.2.1, the most brittle bond the chain
+meets) and at the start values -- and each run must pass its energy balance and
+quasi-static checks (``config.explicit``), which :func:`three_point` raises on.  (The
+midpoints, 9 more runs, passed in every CI run up to 5787170; cut to keep CI within 90 min.)
 """
 import pytest
 
@@ -23,7 +24,7 @@ COHESIVE = ("delta0", "delta_f", "alpha_d")
 
 
 def _corner(where: float) -> dict:
-    """Interface at ``where`` = 0 (lower bounds), 0.5 (midpoints) or 1 (upper bounds)."""
+    """Interface at ``where`` = 0 (lower bounds) or 1 (upper bounds), linear between."""
     lo_mu, hi_mu = PIPE["mu_bounds"]
     lo_e, hi_e = PIPE["E2_bounds"]
     point = {"mu_rtb": lo_mu + where * (hi_mu - lo_mu), "mu_rtp": lo_mu + where * (hi_mu - lo_mu),
@@ -33,7 +34,7 @@ def _corner(where: float) -> dict:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("where", [0.0, 0.5, 1.0], ids=["lower", "mid", "upper"])
+@pytest.mark.parametrize("where", [0.0, 1.0], ids=["lower", "upper"])
 @pytest.mark.parametrize("case", CASES)
 def test_every_run_the_chain_can_reach_passes_its_checks(case, where):
     cfg = load()

@@ -1,6 +1,9 @@
 """The pipeline end to end (quick profile, the hi-fi chain included) in a temporary copy of the project.
 
-Also: reruns follow inputs and code exactly, and the report renders in Chromium.
+Also: reruns follow inputs and code exactly, and the report renders in Chromium.  Every call
+adds the overlay tests/pipeline_smoke.yaml: a coarser tube mesh and chain fits on the first
+9 mm (their runs stop at 10), so that the whole pipeline runs in CI's time; the quick
+profile's own figures are bench/bench_pipeline.py's.
 """
 from __future__ import annotations
 
@@ -18,11 +21,14 @@ from conftest import ARTIFACTS, copy_project, job_stats
 
 pytestmark = pytest.mark.pipeline
 
+SMOKE = Path("tests") / "pipeline_smoke.yaml"
+
 
 def snakemake(project: Path, *args: str) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(project / "src")}  # the copy's package, not the repo's
     return subprocess.run([sys.executable, "-m", "snakemake", "--cores", "2", "--config", "profile=quick",
-                           *args], cwd=project, env=env, capture_output=True, text=True)
+                           "--configfile", str(project / SMOKE), *args],
+                          cwd=project, env=env, capture_output=True, text=True)
 
 
 def planned_jobs(project: Path) -> dict[str, int]:
