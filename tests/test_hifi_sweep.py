@@ -3,11 +3,13 @@
 The chain (workflow/rules/hifi.smk) fits mu_rtb and mu_rtp in ``hifi.pipeline.mu_bounds``,
 E2/E1 in ``E2_bounds`` and the cohesive (delta0, delta_f, alpha_d) by a simplex from
 their start values; the virtual tests then run every case at what it found.  At the quick
-profile, every case the pipeline runs is run at the lower and at the upper bounds -- the
-cohesive parameters at the paper's values (Sec. 4.2.1, the most brittle bond the chain
-meets) and at the start values -- and each run must pass its energy balance and
-quasi-static checks (``config.explicit``), which :func:`three_point` raises on.  (The
-midpoints, 9 more runs, passed in every CI run up to 5787170; cut to keep CI within 90 min.)
+profile, every case the pipeline runs is run at the lower bounds -- the least friction (where
+a bundle may slip off the rollers), the softest weft and the cohesive parameters at the
+paper's values (Sec. 4.2.1, the most brittle bond the chain meets) -- and each run must pass
+its energy balance and quasi-static checks (``config.explicit``), which :func:`three_point`
+raises on.  The upper bounds and the midpoints (18 more runs, ~35 min of CI) passed in every
+CI run up to 5787170 and at 5fedcc4; they were cut to keep CI within its 90 min:
+``_corner(1.0)`` and ``_corner(0.5)`` give them for a run by hand.
 """
 import pytest
 
@@ -34,7 +36,7 @@ def _corner(where: float) -> dict:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("where", [0.0, 1.0], ids=["lower", "upper"])
+@pytest.mark.parametrize("where", [0.0], ids=["lower"])
 @pytest.mark.parametrize("case", CASES)
 def test_every_run_the_chain_can_reach_passes_its_checks(case, where):
     cfg = load()

@@ -1,7 +1,7 @@
 """The pipeline end to end (quick profile, the hi-fi chain included) in a temporary copy of the project.
 
 Also: reruns follow inputs and code exactly, and the report renders in Chromium.  Every call
-adds the overlay tests/pipeline_smoke.yaml: a coarser tube mesh and chain fits on the first
+adds the overlay tests/pipeline_smoke.yaml: a coarser hi-fi mesh and chain fits on the first
 9 mm (their runs stop at 10), so that the whole pipeline runs in CI's time; the quick
 profile's own figures are bench/bench_pipeline.py's.
 """
