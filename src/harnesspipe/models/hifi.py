@@ -288,8 +288,8 @@ def three_point(inp: HifiInputs, n_shapes: int = 4, settings: DynamicsSettings |
 
     res = integrate(system, t_end, settings, on_output=on_output)
     hist = res.history
-    ke_ie = quasi_static_ratio(hist, inp.config["three_point"]["deflection"],   # KE, IE: at the rows' ends
-                               float(inp.explicit.get("ke_ie_from", KE_IE_FROM)), "deflection_mm_end")
+    ke_ie = quasi_static_ratio(hist, inp.config["three_point"]["deflection"],
+                               float(inp.explicit.get("ke_ie_from", KE_IE_FROM)))
     _reject(res, system, ke_ie, inp.config["explicit"])
     curve = hist[["deflection_mm", "force_N"]].copy()
     summary = {

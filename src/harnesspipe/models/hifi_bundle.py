@@ -57,9 +57,10 @@ WRAP_FRACTION = 0.05     # the tape's wrapping tension rises over this start of 
 
 
 def quasi_static_ratio(history, stroke: float, start: float = KE_IE_FROM,
-                       travel: str = "deflection_mm") -> float:
+                       travel: str = "deflection_mm_end") -> float:
     """max KE/IE over the history rows past ``start x stroke`` of feeder travel (column
-    ``travel``: the feeder's deflection, or the crosshead's displacement of the branch test).
+    ``travel``: the feeder's deflection at the row's end, where KE and IE are taken -- not
+    the row's mean ``deflection_mm`` -- or the crosshead's displacement of the branch test).
 
     The paper's quasi-static criterion (KE/IE < 2 %, Sec. 4.1) cannot hold at the very
     start of any loading from rest: IE grows like the deflection squared while the
