@@ -354,12 +354,14 @@ class YSystem(BundleSystem):
 
     def observe(self, t) -> dict:
         """History row: ``displacement_mm`` (crosshead) and ``force_N`` (strand tension) are
-        means since the previous row, as a load cell averages."""
+        means since the previous row, as a load cell averages; ``displacement_mm_end`` is the
+        crosshead at the row's end, where the energies are taken."""
         span = self.impulse_time
         f = self.impulse / span if span > 0.0 else self.tension()
         u = self.impulse_u / span if span > 0.0 else self.displacement()
         self.impulse = self.impulse_u = self.impulse_time = 0.0
-        return {"displacement_mm": u, "force_N": f, "force_N_instant": self.tension(),
+        return {"displacement_mm": u, "displacement_mm_end": self.displacement(),
+                "force_N": f, "force_N_instant": self.tension(),
                 "plastic": self.plastic_work(), "contacts": self.active,
                 "debonded_ties": self.debonded()}
 
@@ -399,7 +401,7 @@ def pull(inp: HifiInputs, geometry: Geometry, load_case: str, stroke: float = 50
 
     res = integrate(system, system.T, settings, on_output=on_output)
     hist = res.history
-    ke_ie = quasi_static_ratio(hist, stroke, travel="displacement_mm")
+    ke_ie = quasi_static_ratio(hist, stroke, travel="displacement_mm_end")
     limits = inp.config["explicit"]
     h = hist.iloc[-1]
     state_ = (res.n_steps, system.T, h["KE"], h["internal"], h["W_ext"], res.dt)
