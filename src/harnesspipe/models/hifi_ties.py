@@ -112,13 +112,41 @@ class BundleTies:
     def n_ties(self) -> int:
         return int(sum(t["tie_node"].size for t in self.ties))
 
-    def _tie_omega2(self, m) -> np.ndarray:
-        """Gershgorin row of the cohesive springs at each tied node (masses ``m``): a spring
-        ``k = K A`` between two masses has diagonal + off-diagonal ``2 k / m``."""
+    def _tie_rows(self, ties):
+        """Gershgorin weights of a tie group's linearised separation: the target nodes (n, k),
+        each node's weight ``B`` (n, k) and the row sum ``S`` (n,) with the tied node's 1.
+
+        delta = R^T (x_node - X(xi)) - off: the tied node enters with weight 1, a target
+        node with its shape function N_j and, for a quad, through the turning of the
+        quad's frame R (the normal's tilt, grad w), which moves the tie's offset (the
+        tape's and the covering's half thicknesses, ``tie_off``): |off| |grad N_j| at the
+        tie point, on a facet of mean sides a, b.  So B_j = N_j + |off| |grad N_j| and
+        S = 1 + sum_j B_j (2 without an offset)."""
+        targets, N = self._tie_targets(ties)
+        if ties["kind"] != "quad":
+            return targets, N, 1.0 + N.sum(axis=1)
+        p = self.x[targets]
+        a = 0.5 * (np.linalg.norm(p[:, 1] - p[:, 0], axis=1) + np.linalg.norm(p[:, 2] - p[:, 3], axis=1))
+        b = 0.5 * (np.linalg.norm(p[:, 3] - p[:, 0], axis=1) + np.linalg.norm(p[:, 2] - p[:, 1], axis=1))
+        xi, eta = ties["tie_xi"][:, 0:1], ties["tie_xi"][:, 1:2]
+        sx, sy = np.array([[-1.0, 1.0, 1.0, -1.0]]), np.array([[-1.0, -1.0, 1.0, 1.0]])
+        dN_dx = 0.5 * sx * (1.0 + sy * eta) / a[:, None]       # (2 / a) dN/dxi
+        dN_dy = 0.5 * sy * (1.0 + sx * xi) / b[:, None]
+        B = N + np.linalg.norm(ties["tie_off"], axis=1)[:, None] * np.hypot(dN_dx, dN_dy)
+        return targets, B, 1.0 + B.sum(axis=1)
+
+    def _tie_omega2(self, m, targets: bool = False) -> np.ndarray:
+        """Gershgorin row of the cohesive springs at each tied node (masses ``m``): a tie of
+        stiffness ``k = K A`` adds ``k S / m`` at its tied node and, with ``targets``,
+        ``k B_j S / m_j`` at its target's nodes (:meth:`_tie_rows`; a spring between two
+        masses: ``2 k / m`` at each)."""
         w2 = np.zeros(self.mesh.n_nodes)
         for ties in self.ties:
-            np.add.at(w2, ties["tie_node"], 2.0 * np.max(self.K_coh) * ties["tie_area"]
-                      / m[ties["tie_node"]])
+            k = np.max(self.K_coh) * ties["tie_area"]
+            tg, B, S = self._tie_rows(ties)
+            np.add.at(w2, ties["tie_node"], k * S / m[ties["tie_node"]])
+            if targets:
+                np.add.at(w2, tg.ravel(), ((k * S)[:, None] * B).ravel() / m[tg.ravel()])
         return w2
 
     def _stack_ties(self):
