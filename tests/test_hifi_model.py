@@ -366,6 +366,15 @@ def test_beam_tie_carries_no_force_under_rigid_motion_and_its_moment_balances():
     assert np.linalg.norm(f[2, :3]) == pytest.approx(30.0 * 2.0 * np.linalg.norm([0.01, 0.02, 0.005]))
 
 
+def _default_halflap_one_wrap():
+    from harnesspipe.models import hifi, hifi_mesh as hm
+    from harnesspipe.stages.hifi import inputs
+    cfg = load()
+    cfg["profile"] = "default"
+    inp = inputs(cfg, "cwb19_t2_open_halflap", {"end_tape_layers": "1", "tape_tension": "0"})
+    return inp, hifi.HifiSystem(hm.build_mesh(inp.case, inp.config, inp.resolution), inp)
+
+
 def test_tube_nodes_under_offset_ties_are_within_the_stable_step():
     """A quad tie's separation is read in the facet's turning frame, so the tape's offset
     (the half thicknesses, ~0.9 mm on the tube) couples the tie to every node of its facet,
@@ -373,13 +382,68 @@ def test_tube_nodes_under_offset_ties_are_within_the_stable_step():
     default-profile half-lap at one wrap blew up at the tube's end edge within 140 steps
     (energy balance error 1.1e-3 N mm at step 138, the cohesive ties giving 0.9 N mm).
     With the lever in the bound it stays at rest's scale over its first ~380 steps."""
-    from harnesspipe.models import hifi, hifi_mesh as hm
-    from harnesspipe.stages.hifi import inputs
-    cfg = load()
-    cfg["profile"] = "default"
-    inp = inputs(cfg, "cwb19_t2_open_halflap", {"end_tape_layers": "1", "tape_tension": "0"})
-    system = hifi.HifiSystem(hm.build_mesh(inp.case, inp.config, inp.resolution), inp)
+    inp, system = _default_halflap_one_wrap()
     res = integrate(system, 0.006, DynamicsSettings(safety=inp.explicit["safety"], n_output=6))
     h = res.history.iloc[-1]
     assert res.n_steps > 300
     assert h["KE"] < 1e-8 and abs(h["cohesive"]) < 1e-8 and h["debonded_ties"] == 0
+
+
+def test_tie_rows_bound_the_quad_ties_stiffness():
+    """The Gershgorin weights of the quad ties (``_tie_rows``: k B_a S at node a) against
+    the tie's stiffness by central differences of the tie kernel, block row by block row
+    (sum over b of the 3x3 blocks' spectral norms): within 10 % on the ties of the default
+    half-lap (onto the tube and onto the tape underneath), interior and clamped to a facet's corner alike (the bound takes the
+    facet's mean sides; on the tube's curved trapezoids it is exact to a few %, well inside
+    the step's safety factor 0.8, i.e. 1.56 on omega^2).  Without the lever (B = N) the
+    facet nodes weighed 0 carry a stiffness the bound did not see."""
+    inp, s = _default_halflap_one_wrap()
+    itf = inp.interface
+    ratio, unseen = [], 0.0
+    for ties in (t for t in s.ties if t["kind"] == "quad"):     # onto the tube, onto the tape
+        ratio_g, unseen_g = _tie_rows_against_stiffness(s, itf, ties)
+        ratio += ratio_g
+        unseen = max(unseen, unseen_g)
+    assert len(ratio) > 100 and max(ratio) < 1.1 and np.median(ratio) > 0.3
+    assert unseen > 0.3      # stiffness at nodes of weight N = 0: what the old bound missed
+
+
+def _tie_rows_against_stiffness(s, itf, ties):
+    """Per node of a sample of the group's ties: (block row sum of the tie's stiffness) / (its
+    bound k B_a S), and the largest row sum / k at a facet node of weight N = 0."""
+    from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_quad_serial
+    targets, B, S = s._tie_rows(ties)
+    N_all = s._tie_targets(ties)[1]
+    k = np.max(s.K_coh) * ties["tie_area"]
+    n = ties["tie_node"].size
+    clamped = np.flatnonzero(np.abs(ties["tie_xi"]).max(axis=1) >= 1.0)
+    ratio, unseen = [], 0.0
+    for i in np.unique(np.r_[np.arange(0, n, max(1, n // 12)), clamped[:8]]):
+        nodes = np.r_[ties["tie_node"][i], targets[i]]
+        one = slice(i, i + 1)
+
+        def force(x):
+            f = np.zeros_like(x)
+            cohesive_ties_quad_serial(
+                x, np.zeros_like(x), ties["tie_node"][one], ties["tie_quad"][one],
+                ties["tie_xi"][one], ties["tie_sign"][one], ties["tie_off"][one],
+                ties["tie_area"][one], np.zeros(1), ties["quads"], s.K_coh, s.delta0,
+                itf["delta_f"], itf["alpha_d"], np.zeros(1), np.zeros(1), np.zeros(1), f)
+            return f[nodes, :3].ravel()
+
+        K, h = np.zeros((15, 15)), 1e-7
+        for c in range(15):
+            xp, xm = s.x.copy(), s.x.copy()
+            xp[nodes[c // 3], c % 3] += h
+            xm[nodes[c // 3], c % 3] -= h
+            K[:, c] = -(force(xp) - force(xm)) / (2.0 * h)
+        weight, N = np.r_[1.0, B[i]], np.r_[1.0, N_all[i]]
+        for a in range(5):
+            row = sum(np.linalg.norm(K[3 * a:3 * a + 3, 3 * b:3 * b + 3], 2) for b in range(5))
+            if weight[a] == 0.0:          # a corner opposite the tie point: no coupling
+                assert row < 1e-6 * k[i]
+                continue
+            ratio.append(row / (k[i] * weight[a] * S[i]))
+            if N[a] == 0.0:
+                unseen = max(unseen, row / k[i])
+    return ratio, unseen
