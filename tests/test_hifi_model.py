@@ -393,9 +393,10 @@ def test_tie_rows_bound_the_quad_ties_stiffness():
     """The Gershgorin weights of the quad ties (``_tie_rows``: k B_a S at node a) against
     the tie's stiffness by central differences of the tie kernel, block row by block row
     (sum over b of the 3x3 blocks' spectral norms): within 10 % on the ties of the default
-    half-lap (onto the tube and onto the tape underneath), interior and clamped to a facet's corner alike (the bound takes the
-    facet's mean sides; on the tube's curved trapezoids it is exact to a few %, well inside
-    the step's safety factor 0.8, i.e. 1.56 on omega^2).  Without the lever (B = N) the
+    half-lap (onto the tube and onto the tape underneath), interior and clamped to a
+    facet's corner alike (the bound takes the facet's mean sides; on the tube's curved
+    trapezoids it is exact to a few %, well inside the step's safety factor 0.8, i.e.
+    1.56 on omega^2).  Without the lever (B = N) the
     facet nodes weighed 0 carry a stiffness the bound did not see."""
     inp, s = _default_halflap_one_wrap()
     itf = inp.interface

@@ -9,6 +9,7 @@ import numpy as np
 from harnesspipe.fe.assembly.groups import BeamTies, QuadTies
 from harnesspipe.fe.assembly.lanes import stack_groups
 from harnesspipe.fe.contact.tie_targets import make_ties
+from harnesspipe.fe.elements.shell_element import XI_NODE
 from harnesspipe.models import hifi_mesh as hm
 from harnesspipe.models.hifi_mesh_parts import tape_material
 
@@ -23,6 +24,16 @@ BEAM_TIE_SPEC = {"tie_node": ((), I8), "tie_seg": ((), I8), "tie_s": ((), F8),
                  "tie_area": ((), F8), "tie_c": ((), F8), "tie_kappa": ((), F8),
                  "tie_D": ((), F8), "tie_energy": ((), F8)}    # stacked ties to beams
 TIE_HISTORY = ("tie_kappa", "tie_D", "tie_energy")
+
+
+def bilinear(xi_eta):
+    """Bilinear shape functions N (n, 4) and their natural derivatives dN/dxi, dN/deta
+    (n, 4 each) at the points ``xi_eta`` (n, 2): :func:`harnesspipe.fe.elements.shell_element.shape`
+    for many points at once."""
+    s, t = XI_NODE[:, 0], XI_NODE[:, 1]
+    xi, eta = xi_eta[:, 0:1], xi_eta[:, 1:2]
+    return (0.25 * (1.0 + s * xi) * (1.0 + t * eta), 0.25 * s * (1.0 + t * eta),
+            0.25 * t * (1.0 + s * xi))
 
 
 class BundleTies:
@@ -74,9 +85,7 @@ class BundleTies:
         """The target nodes (n, k) of a tie group and their weights (n, k): the quad's
         bilinear shape functions at the tie point, or the segment's linear ones."""
         if ties["kind"] == "quad":
-            xi, eta = ties["tie_xi"][:, 0], ties["tie_xi"][:, 1]
-            N = 0.25 * np.stack([(1 - xi) * (1 - eta), (1 + xi) * (1 - eta),
-                                 (1 + xi) * (1 + eta), (1 - xi) * (1 + eta)], axis=1)
+            N, _, _ = bilinear(ties["tie_xi"])
             return ties["quads"][ties["tie_quad"]], N
         s_ = ties["tie_s"]
         return self.seg[ties["tie_seg"]], np.stack([1.0 - s_, s_], axis=1)
@@ -126,12 +135,13 @@ class BundleTies:
         if ties["kind"] != "quad":
             return targets, N, 1.0 + N.sum(axis=1)
         p = self.x[targets]
-        a = 0.5 * (np.linalg.norm(p[:, 1] - p[:, 0], axis=1) + np.linalg.norm(p[:, 2] - p[:, 3], axis=1))
-        b = 0.5 * (np.linalg.norm(p[:, 3] - p[:, 0], axis=1) + np.linalg.norm(p[:, 2] - p[:, 1], axis=1))
-        xi, eta = ties["tie_xi"][:, 0:1], ties["tie_xi"][:, 1:2]
-        sx, sy = np.array([[-1.0, 1.0, 1.0, -1.0]]), np.array([[-1.0, -1.0, 1.0, 1.0]])
-        dN_dx = 0.5 * sx * (1.0 + sy * eta) / a[:, None]       # (2 / a) dN/dxi
-        dN_dy = 0.5 * sy * (1.0 + sx * xi) / b[:, None]
+
+        def side(i, j):
+            return np.linalg.norm(p[:, j] - p[:, i], axis=1)
+
+        a, b = 0.5 * (side(0, 1) + side(3, 2)), 0.5 * (side(0, 3) + side(1, 2))
+        _, dN_dxi, dN_deta = bilinear(ties["tie_xi"])
+        dN_dx, dN_dy = 2.0 * dN_dxi / a[:, None], 2.0 * dN_deta / b[:, None]
         B = N + np.linalg.norm(ties["tie_off"], axis=1)[:, None] * np.hypot(dN_dx, dN_dy)
         return targets, B, 1.0 + B.sum(axis=1)
 
