@@ -741,16 +741,16 @@ def test_chain_settings_are_what_a_fit_step_needs():
     include what the step fits (a search the data cannot steer keeps them), the friction fits'
     runs stop 1 mm past their window, and each case's model carries its own covering only."""
     import json as json_
-    from harnesspipe.config import load, resolution
+    from harnesspipe.config import load
     from harnesspipe.stages import chain_settings as chain
     cfg = load()
     for step, spec in chain.STEPS.items():
-        s = json_.loads(chain.fit_settings(cfg, step, resolution(cfg)))
+        s = json_.loads(chain.fit_settings(cfg, step))
         assert set(spec["names"]) <= set(s["start"]) and s["cases"] == spec["cases"]
         assert s["window"] == cfg["hifi"]["pipeline"][spec["window"]]
         for case in s["cases"]:
             assert set(s["models"][case]["coverings"]) == {chain.cases(cfg)[case]["covering"]}
-    rtb = json_.loads(chain.fit_settings(cfg, "mu_rtb", resolution(cfg)))
+    rtb = json_.loads(chain.fit_settings(cfg, "mu_rtb"))
     assert rtb["set"]["stop_deflection"] == 21.0 and rtb["bounds"] == [0.05, 0.6]
-    assert "stop_deflection" not in json_.loads(chain.fit_settings(cfg, "fabric", resolution(cfg)))["set"]
+    assert "stop_deflection" not in json_.loads(chain.fit_settings(cfg, "fabric"))["set"]
     assert chain.interface_of(cfg, "twb19_t2", {"mu_rtp": 0.1, "E2_over_E1": 0.6}) == {"mu_rtp": 0.1}

@@ -51,12 +51,12 @@ def test_chain_starts_with_the_build_state_and_carries_it():
     config's start values within layers_bounds and tension_bounds on the whole test of the
     tube CWBs; every later step takes both as priors."""
     cfg = hp_config.load()
-    s = json.loads(chain.fit_settings(cfg, "build", hp_config.resolution(cfg)))
+    s = json.loads(chain.fit_settings(cfg, "build"))
     assert s["names"] == ["end_tape_layers"] and s["method"] == "bounded"
     assert s["start"]["end_tape_layers"] == cfg["hifi"]["build"]["end_tape_layers"]
     assert s["bounds"] == cfg["hifi"]["pipeline"]["layers_bounds"]
     assert s["window"] == cfg["hifi"]["pipeline"]["build_window"]
-    t = json.loads(chain.fit_settings(cfg, "tension", hp_config.resolution(cfg)))
+    t = json.loads(chain.fit_settings(cfg, "tension"))
     assert t["names"] == ["tape_tension"] and t["method"] == "bounded"
     assert t["start"]["tape_tension"] == cfg["hifi"]["build"]["tape_tension"]
     assert t["bounds"] == cfg["hifi"]["pipeline"]["tension_bounds"] and t["cases"] == s["cases"]
@@ -64,3 +64,25 @@ def test_chain_starts_with_the_build_state_and_carries_it():
     assert list(chain.STEPS)[:2] == ["build", "tension"] and chain.STEPS["tension"]["prior"] == ["build"]
     assert all({"build", "tension"} <= set(step["prior"]) for name, step in chain.STEPS.items()
                if name not in ("build", "tension"))
+
+
+def test_chain_fits_at_the_chain_profile_and_virtual_tests_at_the_run_profile():
+    """hifi.pipeline.chain_profile: the fits' models carry that profile's mesh, the virtual
+    tests the run's own; a virtual test reuses a fit's run only when the two meshes agree; a
+    name that is no profile is refused naming the key."""
+    import pytest
+    cfg = hp_config.load(overrides={"profile": "default", "hifi": {"pipeline": {"chain_profile": "quick"}}})
+    fit = json.loads(chain.fit_settings(cfg, "build"))
+    for m in fit["models"].values():
+        assert m["profile"] == "quick"
+        assert m["profiles"] == {"quick": {"hifi": cfg["profiles"]["quick"]["hifi"]}}
+    assert fit["maxfev"] == cfg["hifi"]["pipeline"]["budgets"]["default"]["bounded_maxfev"]
+    run = json.loads(chain.run_settings(cfg, "cwb19_t2_closed", hp_config.resolution(cfg), crosscheck=False))
+    assert run["model"]["profiles"] == {"default": {"hifi": cfg["profiles"]["default"]["hifi"]}}
+    assert not chain.reuses_fit_runs(cfg)
+    own = hp_config.load(overrides={"profile": "default", "hifi": {"pipeline": {"chain_profile": None}}})
+    assert chain.reuses_fit_runs(own)
+    assert json.loads(chain.fit_settings(own, "build"))["models"]["cwb19_t2_closed"]["profile"] == "default"
+    bad = hp_config.load(overrides={"hifi": {"pipeline": {"chain_profile": "fine"}}})
+    with pytest.raises(ValueError, match="hifi.pipeline.chain_profile: 'fine'"):
+        chain.check_windows(bad)

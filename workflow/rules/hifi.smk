@@ -37,9 +37,12 @@ def hifi_interface_step(case):
 def hifi_reuse(case):
     """--reuse of a virtual test: the best-point run of the step that calibrated the case on its
     whole stroke at this very interface (cohesive: both plastic-tube CWBs; fabric: the fabric
-    CWB) -- the stage takes it when its run_key matches, so the run is not made twice."""
+    CWB) -- the stage takes it when its run_key matches, so the run is not made twice; none when
+    the chain ran at another profile's mesh (hifi.pipeline.chain_profile)."""
     step = hifi_interface_step(case)
-    return f"--reuse {RES}/hifi/chain/{step}/{case}" if case in HIFI_STEPS[step]["cases"] else ""
+    if not CHAIN.reuses_fit_runs(config) or case not in HIFI_STEPS[step]["cases"]:
+        return ""
+    return f"--reuse {RES}/hifi/chain/{step}/{case}"
 
 
 def hifi_virtual_inputs(wc):
@@ -127,7 +130,7 @@ rule hifi_fit:
     log:
         f"{RES}/logs/hifi_fit_{{step}}.log",
     params:
-        settings=lambda wc: CHAIN.fit_settings(config, wc.step, PROFILE),
+        settings=lambda wc: CHAIN.fit_settings(config, wc.step),
         refs=lambda wc: " ".join(f"{c}={hifi_prepared(c)}" for c in HIFI_STEPS[wc.step]["cases"]),
         code=HIFI_CODE,
     wildcard_constraints:

@@ -46,11 +46,29 @@ WINDOWS = ("build_window", "friction_window", "cohesive_window", "fabric_window"
 
 
 def check_windows(config: dict) -> None:
-    """Every window and bound of ``hifi.pipeline`` increases (ValueError naming it)."""
+    """Every window and bound of ``hifi.pipeline`` increases, and its ``chain_profile`` names a
+    profile (ValueError naming the key)."""
     pipe = config["hifi"]["pipeline"]
     for name in WINDOWS:
         if not pipe[name][0] < pipe[name][1]:
             raise ValueError(f"config hifi.pipeline.{name}: {pipe[name]} must increase")
+    chain_profile(config)
+
+
+def chain_profile(config: dict) -> str:
+    """The resolution profile the chain's fits run at: ``hifi.pipeline.chain_profile``, or the
+    run's own profile when it is null.  The virtual tests always run at the run's profile."""
+    name = config["hifi"]["pipeline"]["chain_profile"] or config["profile"]
+    if name not in config["profiles"]:
+        raise ValueError(f"config hifi.pipeline.chain_profile: {name!r} is not a profile; "
+                         f"expected one of {sorted(config['profiles'])} or null")
+    return name
+
+
+def reuses_fit_runs(config: dict) -> bool:
+    """Whether a virtual test may take its chain step's best-point run: only when the chain
+    ran at the run's own mesh (else the two runs are different models)."""
+    return chain_profile(config) == config["profile"]
 
 
 def cases(config: dict) -> dict:
@@ -86,11 +104,13 @@ def budget(config: dict) -> dict:
     return budgets.get(config["profile"], budgets["default"])
 
 
-def model(config: dict, case: str, resolution: dict, paper_coverings: bool = False) -> dict:
+def model(config: dict, case: str, resolution: dict, paper_coverings: bool = False,
+          profile: str | None = None) -> dict:
     """The part of the config a hi-fi run of ``case`` reads: its case entry, the covering it
     has (and its material), wires and tape, test geometry, explicit settings and
-    ``resolution`` (the profile's, :func:`harnesspipe.config.resolution`).  A change elsewhere
-    (another covering, the ROM, the branch) reruns none of its runs."""
+    ``resolution`` (of ``profile``, default the run's: :func:`harnesspipe.config.resolution`).
+    A change elsewhere (another covering, the ROM, the branch) reruns none of its runs."""
+    profile = profile or config["profile"]
     c = cases(config)[case]
     cov = c["covering"]
     covs = {} if cov == "none" else {cov: config["coverings"][cov]}
@@ -98,8 +118,8 @@ def model(config: dict, case: str, resolution: dict, paper_coverings: bool = Fal
     if covs:
         mats[covs[cov]["material"]] = config["materials"][covs[cov]["material"]]
     out = {
-        "profile": config["profile"],
-        "profiles": {config["profile"]: {"hifi": resolution["hifi"]}},
+        "profile": profile,
+        "profiles": {profile: {"hifi": resolution["hifi"]}},
         "cases": {case: c},
         "hifi": {"coverings": "paper", "explicit": config["hifi"]["explicit"],
                  "build": config["hifi"]["build"], "extra_cases": {}},
@@ -138,9 +158,12 @@ def fit_stop(config: dict, window) -> dict:
     return {"stop_deflection": end}
 
 
-def fit_settings(config: dict, step: str, resolution: dict) -> str:
-    """Settings of one chain step (``stage hifi-fit``, :func:`harnesspipe.stages.hifi_chain.fit_step`)."""
+def fit_settings(config: dict, step: str) -> str:
+    """Settings of one chain step (``stage hifi-fit``, :func:`harnesspipe.stages.hifi_chain.fit_step`):
+    its models at the mesh of :func:`chain_profile`, its budget the run's profile's."""
     pipe = config["hifi"]["pipeline"]
+    profile = chain_profile(config)
+    resolution = config["profiles"][profile]
     s = STEPS[step]
     bounded = s["method"] == "bounded"
     fabric = any(is_fabric(config, c) for c in s["cases"])
@@ -154,6 +177,7 @@ def fit_settings(config: dict, step: str, resolution: dict) -> str:
         "fatol": None if bounded else pipe["simplex"]["fatol"],
         "maxfev": budget(config)["bounded_maxfev" if bounded else "simplex_maxfev"],
         "flat_factor": pipe["flat_factor"],
-        "start": start, "models": {c: model(config, c, resolution) for c in s["cases"]},
+        "start": start,
+        "models": {c: model(config, c, resolution, profile=profile) for c in s["cases"]},
         "set": {**fit_stop(config, window), **pipe["set"]},
     }, sort_keys=True)
