@@ -262,3 +262,18 @@ def test_without_virtual_tests_the_chain_steps_own_errors_are_named(tree):
     assert ("The model misses its test by more than the goal for the hi-fi step mu_rtb (30 % against 10 %): "
             "its fitted values compensate for what the model lacks.") in text
     assert "virtual tests miss their goal" not in text
+
+
+def test_a_chain_on_another_mesh_is_said(tree):
+    """When hifi.pipeline.chain_profile differs from the run's profile, the limitations and the
+    interface section say the calibration cases' errors include the meshes' difference."""
+    import copy
+    measured = report_html._measured_by_case(tree["prepared"])
+    rows = verdict.verdict_rows(tree["cfg"], tree["res"], tree["fits"], {}, measured)
+    for chain, said in (("quick", True), (None, False)):
+        cfg = copy.deepcopy(tree["cfg"])
+        cfg["profile"] = "default"
+        cfg["hifi"]["pipeline"]["chain_profile"] = chain
+        text = " ".join(verdict.limitations(rows, cfg, tree["res"], tree["fits"], {}, measured))
+        assert ("The calibration chain ran on the quick profile's mesh" in text) is said
+        assert bool(report_html._chain_mesh_note(cfg)) is said

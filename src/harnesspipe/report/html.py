@@ -563,6 +563,18 @@ RUN_GROUPS = (("virtual", "Virtual tests at the calibrated interface"),   # sing
               ("chain", "Calibration runs at the best points"))
 
 
+def _chain_mesh_note(cfg: dict) -> str:
+    """A sentence when the chain's fits ran on another profile's mesh than the virtual tests."""
+    profile = cfg.get("profile", "default")
+    chain = cfg.get("hifi", {}).get("pipeline", {}).get("chain_profile") or profile
+    if chain == profile:
+        return ""
+    return (f" The chain's fits ran on the <b>{html.escape(chain)}</b> profile's mesh "
+            f"(config hifi.pipeline.chain_profile), the virtual tests below on the "
+            f"{html.escape(profile)} profile's: the calibration cases' errors include the "
+            "difference between the two meshes.")
+
+
 @dataclass
 class _HifiCost:
     """The hi-fi runs behind the section, in section order, for its cost table."""
@@ -628,7 +640,7 @@ def _interface_table(root: Path, fits: list[Path], cfg: dict) -> str:
             "the build state (end_tape_layers: wraps of the end bands; tape_tension: the tape's "
             "wrapping tension, N; wire_fill: the wires spread in the covering; tube_closure: a slit "
             "tube rolled onto its bundle) is not in the paper; a build input without a calibrated "
-            "value keeps its config value (initial guess).</p>"
+            "value keeps its config value (initial guess)." + _chain_mesh_note(cfg) + "</p>"
             + _table(["parameter", "calibrated", "initial guess", "paper (Sec. 4.2)", "difference"], rows))
 
 

@@ -380,6 +380,11 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
                    + (f"; hi-fi searches stop after {budget['bounded_maxfev']} (bounded) or "
                       f"{budget['simplex_maxfev']} (simplex) evaluations" if budget else "")
                    + "), not the default profile's reproduction.")
+    chain = cfg.get("hifi", {}).get("pipeline", {}).get("chain_profile") or profile
+    if chain != profile:
+        out.append(f"The calibration chain ran on the {chain} profile's mesh and the virtual tests "
+                   f"on the {profile} profile's (hifi.pipeline.chain_profile), so a calibration "
+                   "case's error includes the difference between the meshes.")
     fid = hifi_fidelity(results, cfg, measured)
     missed = [f for f in fid if f["error"] > f["goal"]]
     if missed:
