@@ -76,7 +76,7 @@ def test_build_state_keys_reach_the_run():
     with pytest.raises(ConfigError, match="end_tape_layers=0.5: expected a number of wraps"):
         inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "0.5"})
     assert inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "2.5"}).config["hifi"]["build"] == {
-        "wire_fill": 0.0, "tube_closure": 1.0, "end_tape_layers": 2.5, "tape_tension": 0.0}
+        "wire_fill": 0.0, "tube_closure": 1.0, "sleeve_closure": 0.0, "end_tape_layers": 2.5, "tape_tension": 0.0}
 
 
 def test_end_tape_layers_thicken_the_end_bands_only():
@@ -125,6 +125,28 @@ def test_closed_slit_tube_is_its_layers_of_wall():
     walls = inputs(resultant, "cwb19_t2_open_coarse", {"tube_closure": "1"})
     with pytest.raises(ValueError, match="wall_law resultant with hifi.build.tube_closure > 0"):
         shell_materials(hm.build_mesh(walls.case, walls.config, "quick"), walls)
+
+
+def test_sleeve_closure_is_a_set_key_of_the_fabric():
+    """``--set sleeve_closure``: the fabric sleeve curled onto the bundle wraps more of the
+    same sheet (its mesh has more hoop elements, its material is unchanged); a value
+    outside [0, 1] is refused naming the key."""
+    from harnesspipe.models import hifi_mesh as hm
+    from harnesspipe.models.hifi_bundle import shell_materials
+    cfg = load()
+    free = inputs(cfg, "cwb19_t2_fabric", {"sleeve_closure": "0"})
+    curled = inputs(cfg, "cwb19_t2_fabric", {"sleeve_closure": "1"})
+    assert curled.config["hifi"]["build"]["sleeve_closure"] == 1.0
+    m0 = hm.build_mesh(free.case, free.config, "quick")
+    m1 = hm.build_mesh(curled.case, curled.config, "quick")
+    fab0, fab1 = m0.shell_part == hm.PART_FABRIC, m1.shell_part == hm.PART_FABRIC
+    assert fab1.sum() > fab0.sum()
+    mat0, _, rho0 = shell_materials(m0, free)
+    mat1, _, rho1 = shell_materials(m1, curled)
+    np.testing.assert_array_equal(mat1[fab1][0], mat0[fab0][0])
+    assert rho1[fab1][0] == rho0[fab0][0]
+    with pytest.raises(ConfigError, match="sleeve_closure=1.2: expected a fraction"):
+        inputs(cfg, "cwb19_t2_fabric", {"sleeve_closure": "1.2"})
 
 
 def test_corrugation_pitch_is_a_set_key_of_the_tubes():

@@ -160,6 +160,51 @@ def test_slit_tube_closes_onto_the_bundle_keeping_its_wall(config, sample, c):
         mp.covering(case, with_closure(config, 1.5), bundle, sample.t_tape)
 
 
+def _with_sleeve(config: dict, c: float) -> dict:
+    return {**config, "hifi": {**config["hifi"], "build": {**config["hifi"]["build"], "sleeve_closure": c}}}
+
+
+@pytest.mark.parametrize("c", [0.5, 1.0])
+def test_fabric_sleeve_curls_onto_the_bundle_keeping_its_sheet(config, sample, c):
+    """sleeve_closure c moves the sleeve's inner layer c of the way to the bundle (at 1 its
+    inner face on the packed bundle plus the packing clearance); the woven sheet keeps its
+    length and its growth per wrap, so it wraps more.  A tube and c = 0 are left alone."""
+    case = _case(config, "cwb19_t2_fabric")
+    bundle = mp.wire_bundle(case, config)
+    free = mp.covering(case, _with_sleeve(config, 0.0), bundle, sample.t_tape)
+    cov = mp.covering(case, _with_sleeve(config, c), bundle, sample.t_tape)
+    assert (free.r1, free.r2, free.wraps) == (4.7, 5.3, 1.25)
+    r_in = bundle.r_bundle + mp.WIRE_CLEARANCE * bundle.pitch
+    assert cov.r1 - 0.5 * cov.t == pytest.approx(free.r1 - 0.5 * free.t - c * (free.r1 - 0.5 * free.t - r_in))
+    length = lambda v: v.theta_end * 0.5 * (v.r1 + v.r2)
+    assert length(cov) == pytest.approx(length(free), rel=1e-12)
+    assert (cov.r2 - cov.r1) / cov.wraps == pytest.approx((free.r2 - free.r1) / free.wraps)
+    assert cov.wraps > free.wraps and cov.theta_end == pytest.approx(2.0 * np.pi * cov.wraps)
+    tube = mp.covering(_case(config, "cwb19_t2_closed"), _with_sleeve(config, c), bundle, sample.t_tape)
+    assert tube.d_i == 10.7
+    with pytest.raises(ValueError, match="sleeve_closure 1.5"):
+        mp.covering(case, _with_sleeve(config, 1.5), bundle, sample.t_tape)
+
+
+def test_curled_sleeve_mesh_wraps_the_bundle_without_overlap(config):
+    """build_mesh with the sleeve curled on: the fabric's innermost nodes lie at r1' and
+    every wire's surface inside the sleeve's inner face (no initial penetration), closer to
+    it than the free sleeve's 0.9 mm."""
+    case = _case(config, "cwb19_t2_fabric")
+    for c, gap_max in ((0.0, None), (1.0, 0.01)):
+        m = build_mesh(case, _with_sleeve(config, c), RES)
+        fab = m.X[np.unique(m.shell_conn[m.shell_part == mp.PART_FABRIC])]
+        r_fab = np.hypot(fab[:, 1], fab[:, 2])
+        wires = m.X[m.wire_nodes.ravel()]
+        r_wire = np.hypot(wires[:, 1], wires[:, 2]).max() + m.info["wire_pitch"] / 2 / (1 + mp.WIRE_CLEARANCE)
+        gap = r_fab.min() - 0.5 * 0.6 - r_wire
+        assert gap >= 0.0
+        if gap_max is None:
+            assert gap > 0.85
+        else:
+            assert gap < gap_max
+
+
 def test_closed_slit_tube_mesh_has_no_cut_and_sits_on_the_bundle(config):
     """build_mesh with the slit tube closed: no cut node pairs, the clearance is the packing
     clearance, the pins touch the smaller tube, info carries the layers."""

@@ -278,6 +278,25 @@ class Covering:
         self.layers = R0 / self.R
         self.cut = False
 
+    def curl_onto(self, r_bundle: float, closure: float, clearance: float) -> None:
+        """Curl a self-wrapping fabric sleeve (Sec. 2.1: its weft is pre-twisted) the fraction
+        ``closure`` of the way from its free spiral (r1, Fig. 6b) onto the bundle: the inner
+        layer's mid radius r1' = r1 - closure (r1 - (r_bundle + clearance + t/2)).  The woven
+        sheet keeps its length L = 2 pi wraps (r1 + r2)/2 and its growth per wrap
+        g = (r2 - r1)/wraps, so it wraps more: wraps' solves pi g w^2 + 2 pi r1' w = L, and
+        r2' = r1' + g wraps'.  0 leaves the sleeve as the paper models it."""
+        if not 0.0 <= closure <= 1.0:
+            raise ValueError(f"sleeve_closure {closure}: expected a fraction in [0, 1]")
+        if self.kind != "fabric" or closure == 0.0:
+            return
+        g = (self.r2 - self.r1) / self.wraps
+        L = self.theta_end * 0.5 * (self.r1 + self.r2)
+        r1 = self.r1 - closure * (self.r1 - (r_bundle + clearance + 0.5 * self.t))
+        wraps = (np.sqrt((np.pi * r1) ** 2 + np.pi * g * L) - np.pi * r1) / (np.pi * g)
+        self.r1, self.r2, self.wraps = r1, r1 + g * wraps, float(wraps)
+        self.phi0 = -np.pi * (self.wraps - 1.0)
+        self.theta_end = 2.0 * np.pi * self.wraps
+
     def spiral_radius(self, theta):
         """Fabric mid-surface r(theta) = r1 + (r2 - r1) theta / (2 pi wraps)."""
         return self.r1 + (self.r2 - self.r1) * np.asarray(theta) / self.theta_end
@@ -312,8 +331,9 @@ class Covering:
 def covering(case: dict, config: dict, bundle: WireBundle, t_tape: float) -> Covering:
     """The case's covering (config ``coverings``, the case's ``d_i``/``d_o`` override those
     of a tube) around ``bundle``, a slit tube closed onto it by config
-    ``hifi.build.tube_closure`` (:meth:`Covering.close_onto`); ValueError if the bundle does
-    not fit inside."""
+    ``hifi.build.tube_closure`` (:meth:`Covering.close_onto`), a fabric sleeve curled onto it
+    by ``hifi.build.sleeve_closure`` (:meth:`Covering.curl_onto`); ValueError if the bundle
+    does not fit inside."""
     name = case["covering"]
     if name == "none":
         return Covering("none", {"r_bundle": bundle.r_bundle}, t_tape)
@@ -324,8 +344,10 @@ def covering(case: dict, config: dict, bundle: WireBundle, t_tape: float) -> Cov
         raise ValueError(f"{bundle.yz.shape[0]} wires (bundle radius {bundle.r_bundle:.3f}) do not "
                          f"fit in {name} (inner radius {cov.inner_min():.3f}); give the case a "
                          f"larger d_i/d_o")
-    closure = float(config.get("hifi", {}).get("build", {}).get("tube_closure", 0.0))
-    cov.close_onto(bundle.r_bundle, closure, WIRE_CLEARANCE * bundle.pitch)
+    build = config.get("hifi", {}).get("build", {})
+    clearance = WIRE_CLEARANCE * bundle.pitch
+    cov.close_onto(bundle.r_bundle, float(build.get("tube_closure", 0.0)), clearance)
+    cov.curl_onto(bundle.r_bundle, float(build.get("sleeve_closure", 0.0)), clearance)
     return cov
 
 

@@ -639,7 +639,8 @@ def _interface_table(root: Path, fits: list[Path], cfg: dict) -> str:
     return (f"<h3>Calibrated interface (Sec. 4.2) and build state</h3><p>From <code>{html.escape(src)}</code>; "
             "the build state (end_tape_layers: wraps of the end bands; tape_tension: the tape's "
             "wrapping tension, N; wire_fill: the wires spread in the covering; tube_closure: a slit "
-            "tube rolled onto its bundle) is not in the paper; a build input without a calibrated "
+            "tube rolled onto its bundle; sleeve_closure: a fabric sleeve curled onto its bundle) "
+            "is not in the paper; a build input without a calibrated "
             "value keeps its config value (initial guess)." + _chain_mesh_note(cfg) + "</p>"
             + _table(["parameter", "calibrated", "initial guess", "paper (Sec. 4.2)", "difference"], rows))
 
