@@ -76,7 +76,7 @@ def test_build_state_keys_reach_the_run():
     with pytest.raises(ConfigError, match="end_tape_layers=0.5: expected a number of wraps"):
         inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "0.5"})
     assert inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "2.5"}).config["hifi"]["build"] == {
-        "wire_fill": 0.0, "tube_closure": 1.0, "sleeve_closure": 0.0, "end_tape_layers": 2.5, "tape_tension": 0.0}
+        "wire_fill": 0.0, "tube_closure": 1.0, "sleeve_closure": 1.0, "end_tape_layers": 2.5, "fabric_end_tape_layers": None, "tape_tension": 0.0}
 
 
 def test_end_tape_layers_thicken_the_end_bands_only():
@@ -95,6 +95,29 @@ def test_end_tape_layers_thicken_the_end_bands_only():
     np.testing.assert_allclose(t3[ends], 3.0 * t1[ends])
     np.testing.assert_array_equal(t3[~ends], t1[~ends])
     np.testing.assert_array_equal(rho3, rho1)
+
+
+def test_fabric_end_tape_layers_act_on_fabric_cwbs_only():
+    """fabric_end_tape_layers sets the end bands of a fabric-sleeved CWB (null: end_tape_layers)
+    and leaves a tube CWB's at end_tape_layers."""
+    from harnesspipe.models import hifi_mesh as hm
+    from harnesspipe.models.hifi_bundle import shell_materials
+    cfg = load()
+
+    def end_thickness(case, sets):
+        inp = inputs(cfg, case, sets)
+        mesh = hm.build_mesh(inp.case, inp.config, "quick")
+        ends = np.isin(mesh.shell_group, (hm.GROUP_END_LEFT, hm.GROUP_END_RIGHT))
+        return shell_materials(mesh, inp)[1][ends][0]
+
+    one = end_thickness("cwb19_t2_fabric", {"end_tape_layers": "1"})
+    assert end_thickness("cwb19_t2_fabric", {"end_tape_layers": "3"}) == pytest.approx(3.0 * one)
+    assert end_thickness("cwb19_t2_fabric", {"end_tape_layers": "3", "fabric_end_tape_layers": "2"}) == \
+        pytest.approx(2.0 * one)
+    tube = end_thickness("cwb19_t2_closed", {"end_tape_layers": "3"})
+    assert end_thickness("cwb19_t2_closed", {"end_tape_layers": "3", "fabric_end_tape_layers": "2"}) == tube
+    with pytest.raises(ConfigError, match="fabric_end_tape_layers=0.5: expected a number of wraps"):
+        inputs(cfg, "cwb19_t2_fabric", {"fabric_end_tape_layers": "0.5"})
 
 
 def test_closed_slit_tube_is_its_layers_of_wall():

@@ -186,6 +186,18 @@ def test_fabric_sleeve_curls_onto_the_bundle_keeping_its_sheet(config, sample, c
         mp.covering(case, _with_sleeve(config, 1.5), bundle, sample.t_tape)
 
 
+def test_sleeve_on_a_small_bundle_curls_to_two_wraps_at_most(config, sample):
+    """7 wires would take the sheet round 2.1 times: the curl stops at two wraps (the
+    self-contact pairs two layers), the sheet's length kept, still clear of the bundle."""
+    case = {**_case(config, "cwb19_t2_fabric"), "wires": {"wire_type2": 7}}
+    bundle = mp.wire_bundle(case, config)
+    free = mp.covering(case, _with_sleeve(config, 0.0), bundle, sample.t_tape)
+    cov = mp.covering(case, _with_sleeve(config, 1.0), bundle, sample.t_tape)
+    assert cov.wraps == mp.MAX_SLEEVE_WRAPS
+    assert cov.theta_end * 0.5 * (cov.r1 + cov.r2) == pytest.approx(free.theta_end * 0.5 * (free.r1 + free.r2))
+    assert bundle.r_bundle < cov.r1 - 0.5 * cov.t < free.r1
+
+
 def test_curled_sleeve_mesh_wraps_the_bundle_without_overlap(config):
     """build_mesh with the sleeve curled on: the fabric's innermost nodes lie at r1' and
     every wire's surface inside the sleeve's inner face (no initial penetration), closer to
@@ -241,7 +253,8 @@ def test_tube_nodes_lie_on_the_mid_surface(config, sample, name, cut):
 
 
 def test_fabric_nodes_lie_on_the_spiral(config, sample):
-    _, cov = _bundle_and_covering(config, sample, "cwb19_t2_fabric")
+    """The free sleeve (sleeve_closure 0): Fig. 6b's spiral, its overlap's layers paired."""
+    _, cov = _bundle_and_covering(_with_sleeve(config, 0.0), sample, "cwb19_t2_fabric")
     part = mp.fabric_shell(cov, np.linspace(*sample.x_tube, 3), 12)
     ring = part.X[:part.X.shape[0] // 3]                                     # first station
     theta = np.unwrap(np.arctan2(-ring[:, 2], ring[:, 1])) - cov.phi0

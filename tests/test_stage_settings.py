@@ -86,3 +86,20 @@ def test_chain_fits_at_the_chain_profile_and_virtual_tests_at_the_run_profile():
     bad = hp_config.load(overrides={"hifi": {"pipeline": {"chain_profile": "fine"}}})
     with pytest.raises(ValueError, match="hifi.pipeline.chain_profile: 'fine'"):
         chain.check_windows(bad)
+
+
+def test_fabric_cwb_fits_its_own_end_bands_before_its_orthotropy():
+    """fabric_build fits fabric_end_tape_layers on the t2 fabric CWB from end_tape_layers'
+    config start (not the tube CWBs' fitted value: its priors do not set it), within
+    layers_bounds; the fabric step takes it as its last prior, so its fit.json's interface
+    (what the fabric virtual tests read) carries it."""
+    cfg = hp_config.load()
+    s = json.loads(chain.fit_settings(cfg, "fabric_build"))
+    assert s["names"] == ["fabric_end_tape_layers"] and s["cases"] == ["cwb19_t2_fabric"]
+    assert cfg["hifi"]["build"]["fabric_end_tape_layers"] is None
+    assert s["start"]["fabric_end_tape_layers"] == cfg["hifi"]["build"]["end_tape_layers"]
+    assert s["bounds"] == cfg["hifi"]["pipeline"]["layers_bounds"]
+    assert not any("fabric_end_tape_layers" in chain.STEPS[p]["names"] for p in chain.STEPS["fabric_build"]["prior"])
+    assert chain.STEPS["fabric"]["prior"][-1] == "fabric_build"
+    own = hp_config.load(overrides={"hifi": {"build": {"fabric_end_tape_layers": 2.0}}})
+    assert json.loads(chain.fit_settings(own, "fabric_build"))["start"]["fabric_end_tape_layers"] == 2.0

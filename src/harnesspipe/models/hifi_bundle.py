@@ -90,6 +90,14 @@ class HifiInputs:
     coverings: dict              # E, sigma_y, K, n per covering (tensile stage)
 
 
+def end_band_layers(build: dict, fabric: bool) -> float:
+    """Wraps of tape in each end band (the band's stiffness thickness over one layer's):
+    ``fabric_end_tape_layers`` on a fabric-sleeved CWB when it is set, else
+    ``end_tape_layers`` (config ``hifi.build``)."""
+    own = build.get("fabric_end_tape_layers") if fabric else None
+    return float(build["end_tape_layers"] if own is None else own)
+
+
 def shell_materials(mesh, inp: HifiInputs):
     """Per-element (mat row, stiffness thickness, density) of the shells (fe/shell_bt layout).
     The ridged tube is the isotropic J2 equivalent shell, or with ``wall_law: resultant``
@@ -113,7 +121,7 @@ def shell_materials(mesh, inp: HifiInputs):
     thick[sel] = tape["thickness"]
     rho[sel] = tape["rho"]
     ends = sel & np.isin(mesh.shell_group, (hm.GROUP_END_LEFT, hm.GROUP_END_RIGHT))
-    thick[ends] *= cfg["hifi"]["build"]["end_tape_layers"]      # wraps of the end bands
+    thick[ends] *= end_band_layers(cfg["hifi"]["build"], (mesh.shell_part == hm.PART_FABRIC).any())
     sel = mesh.shell_part == hm.PART_TUBE
     if sel.any():
         own = {k: inp.case[k] for k in ("d_i", "d_o") if k in inp.case}   # e.g. the 15 mm tube

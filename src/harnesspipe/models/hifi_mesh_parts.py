@@ -26,6 +26,7 @@ PART_TUBE, PART_TAPE, PART_FABRIC = 0, 1, 2
 PART_NAMES = {PART_TUBE: "tube", PART_TAPE: "tape", PART_FABRIC: "fabric"}
 TIE_COVERING, TIE_WIRES, TIE_TAPE = 1, 2, 3
 GROUP_COVERING, GROUP_HELIX, GROUP_END_LEFT, GROUP_END_RIGHT = 0, 1, 2, 3
+MAX_SLEEVE_WRAPS = 2.0             # a curled fabric sleeve's layers at most (Covering.curl_onto)
 WIRE_CLEARANCE = 1.0e-3            # relative packing clearance (fraction of d)
 EX = np.array([1.0, 0.0, 0.0])     # the bundle axis: material direction 1 of the coverings
 
@@ -284,7 +285,9 @@ class Covering:
         layer's mid radius r1' = r1 - closure (r1 - (r_bundle + clearance + t/2)).  The woven
         sheet keeps its length L = 2 pi wraps (r1 + r2)/2 and its growth per wrap
         g = (r2 - r1)/wraps, so it wraps more: wraps' solves pi g w^2 + 2 pi r1' w = L, and
-        r2' = r1' + g wraps'.  0 leaves the sleeve as the paper models it."""
+        r2' = r1' + g wraps'; at most ``MAX_SLEEVE_WRAPS`` (the fabric's self-contact pairs
+        two layers, :func:`fabric_shell`), where a small bundle stops the curl short of it
+        (r1' from L at two wraps).  0 leaves the sleeve as the paper models it."""
         if not 0.0 <= closure <= 1.0:
             raise ValueError(f"sleeve_closure {closure}: expected a fraction in [0, 1]")
         if self.kind != "fabric" or closure == 0.0:
@@ -293,6 +296,9 @@ class Covering:
         L = self.theta_end * 0.5 * (self.r1 + self.r2)
         r1 = self.r1 - closure * (self.r1 - (r_bundle + clearance + 0.5 * self.t))
         wraps = (np.sqrt((np.pi * r1) ** 2 + np.pi * g * L) - np.pi * r1) / (np.pi * g)
+        if wraps > MAX_SLEEVE_WRAPS:
+            wraps = MAX_SLEEVE_WRAPS
+            r1 = L / (2.0 * np.pi * wraps) - 0.5 * g * wraps
         self.r1, self.r2, self.wraps = r1, r1 + g * wraps, float(wraps)
         self.phi0 = -np.pi * (self.wraps - 1.0)
         self.theta_end = 2.0 * np.pi * self.wraps

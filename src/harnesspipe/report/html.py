@@ -633,11 +633,13 @@ def _interface_table(root: Path, fits: list[Path], cfg: dict) -> str:
     guess = {**cfg.get("hifi", {}).get("parameters", {}), **cfg.get("hifi", {}).get("build", {})}
     names = list(HIFI_INTERFACE) + [k for k in fitted if k not in HIFI_INTERFACE]   # build state
     names += [k for k in cfg.get("hifi", {}).get("build", {}) if k not in names]     # kept, not fitted
+    guess = {k: ("" if v is None else v) for k, v in guess.items()}      # null: another key's value
     rows = [[k, fitted.get(k, ""), guess.get(k, ""), pi.get(k, ""), _rel(fitted.get(k), pi.get(k))]
             for k in names]
     src = "results/hifi/interface.csv" if iface.exists() else "chain fits so far (interface.csv not written yet)"
     return (f"<h3>Calibrated interface (Sec. 4.2) and build state</h3><p>From <code>{html.escape(src)}</code>; "
-            "the build state (end_tape_layers: wraps of the end bands; tape_tension: the tape's "
+            "the build state (end_tape_layers: wraps of the end bands; fabric_end_tape_layers: "
+            "those of a fabric-sleeved CWB, empty: end_tape_layers; tape_tension: the tape's "
             "wrapping tension, N; wire_fill: the wires spread in the covering; tube_closure: a slit "
             "tube rolled onto its bundle; sleeve_closure: a fabric sleeve curled onto its bundle) "
             "is not in the paper; a build input without a calibrated "

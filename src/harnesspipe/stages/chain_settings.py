@@ -4,7 +4,10 @@ The chain in order: each step fixes what the earlier steps fitted (``prior``).  
 with the specimen's build state that the sensitivity screen shows the curves depend on (the
 end bands' wraps, ``build``, then the tape's wrapping tension, ``tension``: two bounded
 searches in turn, each on the whole test of both tube CWBs; bench/RESULTS.md "Hi-fi
-sensitivity screen"), then the paper's steps.  ``cores``:
+sensitivity screen"), then the paper's steps; before the paper's fabric step, the fabric
+CWB's own end bands (``fabric_build``: its tape is only at the ends, and the tube CWBs' fitted
+bands hold its curled sleeve too stiffly; bench/RESULTS.md "The fabric sleeve curled onto its
+bundle").  ``cores``:
 the step's Snakemake threads.  Nothing else of the chain can run beside the friction and
 cohesive fits (every virtual test needs their interface), so they take both cores (one process
 per case, or one process with two Numba threads); the fabric fit takes one, and the virtual
@@ -34,13 +37,16 @@ STEPS = {
     "cohesive": {"names": ["delta0", "delta_f", "alpha_d"],
                  "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"], "window": "cohesive_window",
                  "method": "simplex", "prior": ["build", "tension", "mu_rtb", "mu_rtp"], "cores": 2},
+    "fabric_build": {"names": ["fabric_end_tape_layers"], "cases": ["cwb19_t2_fabric"],
+                     "window": "fabric_window", "method": "bounded", "bounds": "layers_bounds",
+                     "prior": ["build", "tension", "mu_rtb", "mu_rtp", "cohesive"], "cores": 1},
     "fabric": {"names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": "fabric_window",
                "method": "bounded", "bounds": "E2_bounds",
-               "prior": ["build", "tension", "mu_rtb", "mu_rtp", "cohesive"], "cores": 1},
+               "prior": ["build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_build"], "cores": 1},
 }
 VALIDATION = ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric")   # Sec. 4.2: predicted, no refit
 CALIBRATED = sorted({c for s in STEPS.values() for c in s["cases"]})
-BUILD = ("end_tape_layers", "tape_tension")   # build-state inputs the chain fits (config hifi.build)
+BUILD = ("end_tape_layers", "tape_tension", "fabric_end_tape_layers")   # build-state inputs the chain fits (config hifi.build)
 WINDOWS = ("build_window", "friction_window", "cohesive_window", "fabric_window",
            "layers_bounds", "tension_bounds", "mu_bounds", "E2_bounds")
 
@@ -158,6 +164,15 @@ def fit_stop(config: dict, window) -> dict:
     return {"stop_deflection": end}
 
 
+def build_start(config: dict, name: str) -> float:
+    """Start value of a fitted build input: config ``hifi.build``; the fabric CWB's end bands
+    (``fabric_end_tape_layers``, null there) start where the tube CWBs' do, at
+    ``end_tape_layers``' config value, not at their fitted one."""
+    build = config["hifi"]["build"]
+    value = build[name]
+    return float(build["end_tape_layers"] if value is None else value)
+
+
 def fit_settings(config: dict, step: str) -> str:
     """Settings of one chain step (``stage hifi-fit``, :func:`harnesspipe.stages.hifi_chain.fit_step`):
     its models at the mesh of :func:`chain_profile`, its budget the run's profile's."""
@@ -168,7 +183,7 @@ def fit_settings(config: dict, step: str) -> str:
     bounded = s["method"] == "bounded"
     fabric = any(is_fabric(config, c) for c in s["cases"])
     start = {k: v for k, v in config["hifi"]["parameters"].items() if k != "E2_over_E1" or fabric}
-    start.update({k: config["hifi"]["build"][k] for k in BUILD if k in s["names"]})
+    start.update({k: build_start(config, k) for k in BUILD if k in s["names"]})
     window = pipe[s["window"]]
     return json.dumps({
         "names": s["names"], "cases": s["cases"], "window": window, "method": s["method"],
