@@ -4,8 +4,9 @@
 #   hifi_chain_all: the Sec. 4.2 calibration chain against the measured means
 #       (mu_rtb -> mu_rtp -> cohesive -> E2/E1) -> results/hifi/interface.csv, then the virtual
 #       test of every case (incl. hifi.extra_cases) at the fitted interface.
-# `all` includes the groups named in hifi.pipeline.in_all (stages/targets.py; chain: 33 min at
-# the default profile on 2 cores, 10 min at quick; crosscheck: 5 more runs).
+# `all` includes the groups named in hifi.pipeline.in_all (stages/targets.py; the chain's fits
+# run on the mesh of hifi.pipeline.chain_profile, the virtual tests on the run's profile;
+# the whole quick pipeline 23-30 min on 2 cores, bench/RESULTS.md; crosscheck: 5 more runs).
 # Every virtual test is one thread, so two run side by side; a fit step takes its HIFI_STEPS cores.
 
 from harnesspipe.stages import chain_settings as CHAIN
