@@ -18,9 +18,11 @@ RES = PRESETS["quick"]
 
 @pytest.fixture(scope="module")
 def meshes(config):
-    """The slit tubes as moulded (tube_closure 0): the geometry of eq. 5 checked here; the
-    default closure, which rolls them onto the bundle, in test_hifi_mesh_parts."""
+    """The slit tubes as moulded (tube_closure 0) and the fabric sleeve as the paper models it
+    (sleeve_closure 0): the geometry of eq. 5 and Fig. 6b checked here; the default closures,
+    which roll the tube and curl the sleeve onto the bundle, in test_hifi_mesh_parts."""
     moulded = with_closure(config, 0.0)
+    moulded["hifi"]["build"] = {**moulded["hifi"]["build"], "sleeve_closure": 0.0}
     return {name: build_mesh(case, moulded, RES) for name, case in config["cases"].items()}
 
 
