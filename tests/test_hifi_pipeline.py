@@ -637,7 +637,7 @@ def test_hifi_targets_resolve_and_run(project):
                                                                      *hifi_chain.BUILD]
     assert list(pd.read_csv(res / "crosscheck" / "table3.csv").columns) == ["case", "E", "sigma_y", "K", "n",
                                                                             "reference"]
-    for step in ("build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric"):
+    for step in ("build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_build", "fabric"):
         for name in ("fit.json", "curve.csv", "trace.h5", "rejected.jsonl", "fit.png"):
             assert (res / "chain" / step / name).exists()
         # the friction fits (window < 20 mm) end their runs 1 mm past it; the others go to 30
@@ -651,17 +651,18 @@ def test_hifi_targets_resolve_and_run(project):
     assert planned(snakemake(project, "-n", "hifi_chain_all", "hifi_crosscheck_all")) == {}
 
 
-@pytest.mark.parametrize("overlay, crosscheck", [
-    ("coverings:\n  fabric_tube:\n    nu12: 0.3\n", True),          # the fabric's Poisson ratio (eq. 12)
-    ("hifi:\n  pipeline:\n    E2_bounds: [0.3, 1.1]\n", False),    # read by the E2/E1 fit only
+@pytest.mark.parametrize("overlay, crosscheck, steps", [
+    ("coverings:\n  fabric_tube:\n    nu12: 0.3\n", True,           # the fabric's Poisson ratio (eq. 12):
+     {"fabric_build", "fabric"}),                                     # every fit on the fabric CWB
+    ("hifi:\n  pipeline:\n    E2_bounds: [0.3, 1.1]\n", False, {"fabric"}),   # read by the E2/E1 fit only
 ])
-def test_fabric_parameter_reruns_only_fabric_fits(project, overlay, crosscheck):
+def test_fabric_parameter_reruns_only_fabric_fits(project, overlay, crosscheck, steps):
     path = project / "overlay.yaml"                 # merged over config/config.yaml
     path.write_text(overlay)
     run = snakemake(project, "hifi_chain_all", "hifi_crosscheck_all", "-n", "--configfile", str(path))
     jobs = planned(run)
-    expected = {"hifi_fit": 1, "hifi_interface": 1, "hifi_virtual": 2, "hifi_chain_all": 1}
-    fabric = {"step=fabric", "case=cwb19_t2_fabric", "case=cwb10t1_9t2_fabric"}
+    expected = {"hifi_fit": len(steps), "hifi_interface": 1, "hifi_virtual": 2, "hifi_chain_all": 1}
+    fabric = {f"step={s}" for s in steps} | {"case=cwb19_t2_fabric", "case=cwb10t1_9t2_fabric"}
     if crosscheck:
         expected.update({"hifi_crosscheck": 2, "hifi_crosscheck_rom": 2, "hifi_crosscheck_table": 1,
                          "hifi_crosscheck_all": 1})
