@@ -565,10 +565,10 @@ RUN_GROUPS = (("virtual", "Virtual tests at the calibrated interface"),   # sing
 
 def _chain_mesh_note(cfg: dict) -> str:
     """A sentence when the chain's fits ran on another profile's mesh than the virtual tests."""
-    profile = cfg.get("profile", "default")
-    chain = cfg.get("hifi", {}).get("pipeline", {}).get("chain_profile") or profile
-    if chain == profile:
+    chain = verdict.chain_mesh(cfg)
+    if not chain:
         return ""
+    profile = cfg.get("profile", "default")
     return (f" The chain's fits ran on the <b>{html.escape(chain)}</b> profile's mesh "
             f"(config hifi.pipeline.chain_profile), the virtual tests below on the "
             f"{html.escape(profile)} profile's: the calibration cases' errors include the "

@@ -369,6 +369,14 @@ def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
     return out
 
 
+def chain_mesh(cfg: dict) -> str | None:
+    """The profile whose mesh the chain's fits ran on, when it is not the run's own
+    (``hifi.pipeline.chain_profile``), else None."""
+    profile = cfg.get("profile", "default")
+    chain = cfg.get("hifi", {}).get("pipeline", {}).get("chain_profile") or profile
+    return None if chain == profile else chain
+
+
 def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: dict,
                 measured: dict) -> list[str]:
     """Sentences on what not to trust, each produced by a condition on the results."""
@@ -380,8 +388,8 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
                    + (f"; hi-fi searches stop after {budget['bounded_maxfev']} (bounded) or "
                       f"{budget['simplex_maxfev']} (simplex) evaluations" if budget else "")
                    + "), not the default profile's reproduction.")
-    chain = cfg.get("hifi", {}).get("pipeline", {}).get("chain_profile") or profile
-    if chain != profile:
+    chain = chain_mesh(cfg)
+    if chain:
         out.append(f"The calibration chain ran on the {chain} profile's mesh and the virtual tests "
                    f"on the {profile} profile's (hifi.pipeline.chain_profile), so a calibration "
                    "case's error includes the difference between the meshes.")

@@ -166,11 +166,13 @@ def fit_stop(config: dict, window) -> dict:
 
 def build_start(config: dict, name: str) -> float:
     """Start value of a fitted build input: config ``hifi.build``; the fabric CWB's end bands
-    (``fabric_end_tape_layers``, null there) start where the tube CWBs' do, at
-    ``end_tape_layers``' config value, not at their fitted one."""
+    start as a fabric CWB's run reads them (:func:`harnesspipe.models.hifi_bundle.end_band_layers`:
+    ``end_tape_layers``' config value when null), not at the tube CWBs' fitted value."""
+    from harnesspipe.models.hifi_bundle import end_band_layers
     build = config["hifi"]["build"]
-    value = build[name]
-    return float(build["end_tape_layers"] if value is None else value)
+    if name == "fabric_end_tape_layers":
+        return end_band_layers(build, fabric=True)
+    return float(build[name])
 
 
 def fit_settings(config: dict, step: str) -> str:
