@@ -266,7 +266,8 @@ def test_without_virtual_tests_the_chain_steps_own_errors_are_named(tree):
 
 def test_a_chain_on_another_mesh_is_said(tree):
     """When hifi.pipeline.chain_profile differs from the run's profile, the limitations and the
-    interface section say the calibration cases' errors include the meshes' difference."""
+    interface section say the calibration cases' errors include the meshes' difference, and the
+    limitations name the budget the chain ran with (that profile's)."""
     import copy
     measured = report_html._measured_by_case(tree["prepared"])
     rows = verdict.verdict_rows(tree["cfg"], tree["res"], tree["fits"], {}, measured)
@@ -276,4 +277,6 @@ def test_a_chain_on_another_mesh_is_said(tree):
         cfg["hifi"]["pipeline"]["chain_profile"] = chain
         text = " ".join(verdict.limitations(rows, cfg, tree["res"], tree["fits"], {}, measured))
         assert ("The calibration chain ran on the quick profile's mesh" in text) is said
+        quick = cfg["hifi"]["pipeline"]["budgets"]["quick"]
+        assert (f"with its budget (hi-fi searches stop after {quick['bounded_maxfev']} (bounded)" in text) is said
         assert bool(report_html._chain_mesh_note(cfg)) is said

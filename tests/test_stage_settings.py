@@ -76,13 +76,15 @@ def test_chain_fits_at_the_chain_profile_and_virtual_tests_at_the_run_profile():
     for m in fit["models"].values():
         assert m["profile"] == "quick"
         assert m["profiles"] == {"quick": {"hifi": cfg["profiles"]["quick"]["hifi"]}}
-    assert fit["maxfev"] == cfg["hifi"]["pipeline"]["budgets"]["default"]["bounded_maxfev"]
+    assert fit["maxfev"] == cfg["hifi"]["pipeline"]["budgets"]["quick"]["bounded_maxfev"]
     run = json.loads(chain.run_settings(cfg, "cwb19_t2_closed", hp_config.resolution(cfg), crosscheck=False))
     assert run["model"]["profiles"] == {"default": {"hifi": cfg["profiles"]["default"]["hifi"]}}
     assert not chain.reuses_fit_runs(cfg)
     own = hp_config.load(overrides={"profile": "default", "hifi": {"pipeline": {"chain_profile": None}}})
     assert chain.reuses_fit_runs(own)
-    assert json.loads(chain.fit_settings(own, "build"))["models"]["cwb19_t2_closed"]["profile"] == "default"
+    own_fit = json.loads(chain.fit_settings(own, "build"))
+    assert own_fit["models"]["cwb19_t2_closed"]["profile"] == "default"
+    assert own_fit["maxfev"] == cfg["hifi"]["pipeline"]["budgets"]["default"]["bounded_maxfev"]
     bad = hp_config.load(overrides={"hifi": {"pipeline": {"chain_profile": "fine"}}})
     with pytest.raises(ValueError, match="hifi.pipeline.chain_profile: 'fine'"):
         chain.check_windows(bad)

@@ -382,17 +382,19 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
     """Sentences on what not to trust, each produced by a condition on the results."""
     out = []
     profile = cfg.get("profile", "default")
-    if profile != "default":
-        budget = cfg["hifi"]["pipeline"]["budgets"].get(profile, {})
-        out.append(f"This run is of the {profile} profile (coarser meshes"
-                   + (f"; hi-fi searches stop after {budget['bounded_maxfev']} (bounded) or "
-                      f"{budget['simplex_maxfev']} (simplex) evaluations" if budget else "")
-                   + "), not the default profile's reproduction.")
     chain = chain_mesh(cfg)
+    budget = cfg["hifi"]["pipeline"]["budgets"].get(chain or profile, {})
+    searches = (f"hi-fi searches stop after {budget['bounded_maxfev']} (bounded) or "
+                f"{budget['simplex_maxfev']} (simplex) evaluations" if budget else "")
+    if profile != "default":
+        out.append(f"This run is of the {profile} profile (coarser meshes"
+                   + (f"; {searches}" if searches and not chain else "")
+                   + "), not the default profile's reproduction.")
     if chain:
-        out.append(f"The calibration chain ran on the {chain} profile's mesh and the virtual tests "
-                   f"on the {profile} profile's (hifi.pipeline.chain_profile), so a calibration "
-                   "case's error includes the difference between the meshes.")
+        out.append(f"The calibration chain ran on the {chain} profile's mesh"
+                   + (f", with its budget ({searches})," if searches else "")
+                   + f" and the virtual tests on the {profile} profile's (hifi.pipeline.chain_profile), "
+                   "so a calibration case's error includes the difference between the meshes.")
     fid = hifi_fidelity(results, cfg, measured)
     missed = [f for f in fid if f["error"] > f["goal"]]
     if missed:

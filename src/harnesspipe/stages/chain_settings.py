@@ -105,9 +105,11 @@ def virtual_priority(config: dict, case: str, reused: bool) -> float:
 
 
 def budget(config: dict) -> dict:
-    """Hi-fi evaluations per fit at the config's profile (missing profile: default)."""
+    """Hi-fi evaluations per fit at the profile whose mesh the fits run on (:func:`chain_profile`;
+    missing profile: default): an evaluation's cost is that mesh's, and past its first three a
+    search at the data's floor bought nothing (bench/RESULTS.md 'Pipeline (default)')."""
     budgets = config["hifi"]["pipeline"]["budgets"]
-    return budgets.get(config["profile"], budgets["default"])
+    return budgets.get(chain_profile(config), budgets["default"])
 
 
 def model(config: dict, case: str, resolution: dict, paper_coverings: bool = False,
@@ -177,7 +179,7 @@ def build_start(config: dict, name: str) -> float:
 
 def fit_settings(config: dict, step: str) -> str:
     """Settings of one chain step (``stage hifi-fit``, :func:`harnesspipe.stages.hifi_chain.fit_step`):
-    its models at the mesh of :func:`chain_profile`, its budget the run's profile's."""
+    its models at the mesh of :func:`chain_profile` and that profile's :func:`budget`."""
     pipe = config["hifi"]["pipeline"]
     profile = chain_profile(config)
     resolution = config["profiles"][profile]
