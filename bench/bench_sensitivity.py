@@ -2,25 +2,31 @@
 the chain could fit moves the curve in the window it would be fitted on.
 
 Run with the project's venv: ``.venv/bin/python bench/bench_sensitivity.py [--profile quick]``.
-Replaces the section "## Hi-fi sensitivity screen" of bench/RESULTS.md.
+Replaces the section "## Hi-fi sensitivity screen" of bench/RESULTS.md and writes the record
+bench/sensitivity.json, which the pipeline's report shows (report/screen.py).
 
 For each calibration case of the chain (Sec. 4.2: the closed and the half-lap CWB for the
 friction and cohesive steps, the t2 fabric CWB for E2/E1) and each input, one virtual test
 with the input moved by STEP (relative; the build state's ``wire_fill`` and ``tape_tension``
-by an absolute step, their defaults being 0) against the base run at the config's start values and the paper's
-Table 2.  The normalised sensitivity of a window is
+by an absolute step, their defaults being 0, the closures down by one, their defaults being the
+upper bound 1) against the base run at the config's start values (a build input at the chain's
+start: :func:`harnesspipe.stages.chain_settings.build_start`) and the paper's Table 2.  The normalised sensitivity of a window is
 
     S = (||F' - F|| / ||F||) / (dp / p)     (l2 over the measured grid inside the window)
 
 so S = 1 means a 1 % change of the input moves the window's curve by 1 %; for ``wire_fill``
-and ``tape_tension`` the denominator is the absolute step (per unit fill, per N).  Inputs
+and ``tape_tension`` the denominator is the absolute step (per unit fill, per N), for the
+closures its size (per unit closure).  Inputs
 that cannot act on a case (E2/E1 on a tube) are not run.  Each run is one Numba thread; two run side by side.
 """
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
+import subprocess
 from multiprocessing import Pool
+from pathlib import Path
 
 import numpy as np
 
@@ -28,17 +34,16 @@ from benchlib import section_tail, write_section
 
 HEADING = "## Hi-fi sensitivity screen"
 STEP = 0.25                    # relative step of an interface input
-ABSOLUTE = {"wire_fill": 0.5, "tape_tension": 2.0}  # defaults 0: absolute steps (fill, N)
+ABSOLUTE = {"wire_fill": 0.5, "tape_tension": 2.0,      # defaults 0: absolute steps (fill, N)
+            "tube_closure": -0.5, "sleeve_closure": -0.5}  # defaults 1, the upper bound: down
+RECORD = Path(__file__).resolve().parent / "sensitivity.json"
+COMMON = ("wire_fill", "tape_tension", "mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d")
 CASES = {                      # calibration case -> (its windows, the inputs that can act on it)
-    "cwb19_t2_closed": (("friction_window", "cohesive_window"),
-                        ("end_tape_layers", "wire_fill", "tape_tension", "mu_rtb", "mu_rtp",
-                         "delta0", "delta_f", "alpha_d")),
+    "cwb19_t2_closed": (("friction_window", "cohesive_window"), ("end_tape_layers",) + COMMON),
     "cwb19_t2_open_halflap": (("friction_window", "cohesive_window"),
-                              ("end_tape_layers", "wire_fill", "tape_tension", "mu_rtb", "mu_rtp",
-                               "delta0", "delta_f", "alpha_d")),
+                              ("end_tape_layers", "tube_closure") + COMMON),
     "cwb19_t2_fabric": (("fabric_window",),
-                        ("end_tape_layers", "wire_fill", "tape_tension", "mu_rtb", "mu_rtp",
-                         "delta0", "delta_f", "alpha_d", "E2_over_E1")),
+                        ("fabric_end_tape_layers", "sleeve_closure") + COMMON + ("E2_over_E1",)),
 }
 
 
@@ -48,17 +53,26 @@ def _run(job):
     os.environ["NUMBA_NUM_THREADS"] = "1"
     from harnesspipe.config import load
     from harnesspipe.models.hifi import three_point
-    from harnesspipe.stages.hifi import inputs, parameters
+    from harnesspipe.stages.hifi import inputs
     case, name, profile = job
     cfg = load(overrides={"profile": profile})
     sets = {}
     if name is not None:
-        base = parameters(cfg, {})
-        value = {**base["interface"], **base["build"]}[name]
-        sets[name] = str(value + ABSOLUTE[name] if name in ABSOLUTE else value * (1.0 + STEP))
+        sets[name] = str(moved(cfg, name))
     run = three_point(inputs(cfg, case, sets), n_shapes=1)
     c = run.curve
     return case, name, c["deflection_mm"].to_numpy(), c["force_N"].to_numpy(), run.summary
+
+
+def moved(cfg: dict, name: str) -> float:
+    """The input's screened value: its start value moved by STEP (or its ABSOLUTE step)."""
+    from harnesspipe.stages.chain_settings import build_start
+    from harnesspipe.stages.hifi import parameters
+    if name in cfg["hifi"]["build"]:
+        value = build_start(cfg, name)
+    else:
+        value = parameters(cfg, {})["interface"][name]
+    return value + ABSOLUTE[name] if name in ABSOLUTE else value * (1.0 + STEP)
 
 
 def window_sensitivity(u, F0, F1, window, denominator) -> float:
@@ -87,26 +101,41 @@ def main() -> None:
         for name in names:
             u1, F1, s = curves[(case, name)]
             F1 = np.interp(u, u1, F1)
-            den = ABSOLUTE.get(name, STEP)
+            den = abs(ABSOLUTE.get(name, STEP))
             S = {w: window_sensitivity(u, F0, F1, pipe[w], den) for w in windows}
             table[f"{case}/{name}"] = S
             cells = " | ".join(f"{w.replace('_window', '')} {S[w]:.3f}" for w in windows)
             rows.append(f"| {case} | {name} | {cells} |")
             print(rows[-1], flush=True)
-    step = ", ".join(f"{k} +{v}" for k, v in ABSOLUTE.items())
+    step = ", ".join(f"{k} {v:+}" for k, v in ABSOLUTE.items())
     text = f"""{HEADING}
 
 `bench/bench_sensitivity.py --profile {args.profile}`: each input the chain could fit moved by
 +{100 * STEP:.0f} % ({step}) from the config's start values, the paper's Table 2 coverings; S
 = relative l2 change of the curve in the window / relative change of the input (absolute for
-wire_fill, per unit fill, and tape_tension, per N).  S below ~0.05 means the window's curve barely sees the input.
+wire_fill, per unit fill, tape_tension, per N, and the closures, per unit closure).  S below ~0.05
+means the window's curve barely sees the input.
 
 | case | input | S per window |
 |---|---|---|
 """ + "\n".join(rows) + "\n"
     tail = section_tail(HEADING)          # the notes by hand stay
     write_section(HEADING, text + ("\n" + tail + "\n" if tail else ""))
+    write_record(args.profile, step, table)
     print(json.dumps(table, indent=1))
+
+
+def write_record(profile: str, step: str, table: dict) -> None:
+    """bench/sensitivity.json: the screen's S per case, input and window, with what it was
+    run on, for the pipeline's report."""
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True, cwd=RECORD.parent).stdout.strip()
+    rows = [{"case": key.split("/")[0], "input": key.split("/")[1],
+             "S": {w.replace("_window", ""): round(v, 4) for w, v in S.items()}}
+            for key, S in table.items()]
+    RECORD.write_text(json.dumps({
+        "profile": profile, "commit": commit, "date": datetime.date.today().isoformat(),
+        "step": f"+{100 * STEP:.0f} % ({step})", "rows": rows}, indent=1) + "\n")
 
 
 if __name__ == "__main__":

@@ -24,7 +24,7 @@ import pandas as pd
 from harnesspipe import __version__
 from harnesspipe.calibrate.uncertainty import Z95
 from harnesspipe.data.synthesize import read_truth
-from harnesspipe.report import links, plots, verdict
+from harnesspipe.report import links, plots, screen, verdict
 from harnesspipe.report.names import labelled, physical_name, solver_statistics
 from harnesspipe.stages.chain_settings import STEPS
 from harnesspipe.stages.common import read_fit
@@ -804,9 +804,11 @@ def _fidelity_table(root: Path, cfg: dict, measured: dict | None = None) -> str:
             f"<div class='wide'><table><tr>{head}</tr>{''.join(rows)}</table></div>")
 
 
-def hifi_section(results: Path, cfg: dict, measured: dict, report_dir: Path | None = None) -> str:
+def hifi_section(results: Path, cfg: dict, measured: dict, report_dir: Path | None = None,
+                 screen_record: dict | None = None) -> str:
     """Everything of results/hifi that exists: cross-check Table 3, the calibration chain,
-    the interface beside the paper's, the virtual tests, their energies and the cost."""
+    the interface beside the paper's, the sensitivity screen's record, the virtual tests,
+    their energies and the cost."""
     heading = f"<h2 id='hifi'>{html.escape(STAGES['hifi'][0])}</h2>"
     root = Path(results) / "hifi"
     runs = sorted(root.glob("*/*/summary.json")) + sorted(root.glob("chain/*/*/summary.json"))
@@ -818,7 +820,7 @@ def hifi_section(results: Path, cfg: dict, measured: dict, report_dir: Path | No
     ctx = _HifiContext(cfg, measured, report_dir)
     parts = [heading, HIFI_INTRO, _fidelity_table(root, cfg, measured), _crosscheck_table(root, cfg),
              _crosscheck_rom_figures(root, cfg),
-             _interface_table(root, fits, cfg)]
+             _interface_table(root, fits, cfg), screen.section(screen_record)]
     parts += [_calibration_step(p, paper, ctx) for p in fits]
     parts += [_single_runs(root, runs, ctx), _cost_table(ctx.cost, paper.get("cost", {}))]
     return "".join(parts)
@@ -1062,8 +1064,9 @@ def with_toc(body: str, first: str = "verdict") -> tuple[str, str]:
 
 
 def build(out: Path, *, cfg: dict, results: Path, check_summary: Path,
-          prepared: list[Path], fits: dict[str, list[Path]]) -> Path:
-    """Write the report to ``out`` (atomically) and return its path."""
+          prepared: list[Path], fits: dict[str, list[Path]], screen_record: dict | None = None) -> Path:
+    """Write the report to ``out`` (atomically) and return its path; ``screen_record``: the
+    sensitivity screen's (:func:`harnesspipe.report.screen.read_record`), if any."""
     results, out = Path(results), Path(out)
     report_dir = out.parent
     truth = read_truth(Path(cfg["data_dir"]))
@@ -1075,7 +1078,7 @@ def build(out: Path, *, cfg: dict, results: Path, check_summary: Path,
                 data_section(Path(check_summary).read_text().strip(), prepared, truth, cfg)]
     for stage in SECTION_ORDER:
         if stage == "hifi":
-            sections.append(hifi_section(results, cfg, measured, report_dir))
+            sections.append(hifi_section(results, cfg, measured, report_dir, screen_record))
         elif fits.get(stage):
             sections.append(stage_section(stage, fits[stage], results, cfg, truth, measured, rows=rows,
                                           report_dir=report_dir))
