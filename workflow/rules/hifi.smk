@@ -137,7 +137,7 @@ rule hifi_fit:
     wildcard_constraints:
         step="|".join(HIFI_STEPS),
     threads: lambda wc: HIFI_STEPS[wc.step]["cores"]     # see HIFI_STEPS
-    priority: 10      # the chain is the longest path of the run: its steps go first (virtual tests 1-1.1, branch_hifi 0)
+    priority: 10      # the chain is the longest path of the run: its steps go first (branch_hifi 2, virtual tests 1-1.1)
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage hifi-fit --step {wildcards.step} --cores {threads} "
         "--settings '{params.settings}' --reference {params.refs} --coverings {input.table2} "
