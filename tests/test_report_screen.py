@@ -55,3 +55,18 @@ def test_the_shipped_record_screens_every_input_the_chain_fits_on_its_cases():
     screened = {(r["case"], r["input"]) for r in record["rows"]}
     wanted = {(case, name) for s in STEPS.values() for case in s["cases"] for name in s["names"]}
     assert wanted <= screened, sorted(wanted - screened)
+
+
+def test_the_report_command_refuses_a_broken_record_and_writes_nothing(tmp_path, capsys):
+    from harnesspipe import cli
+    bad = tmp_path / "screen.json"
+    bad.write_text(json.dumps({"rows": []}))
+    out = tmp_path / "report" / "index.html"
+    args = ["report", "--check", str(tmp_path / "check.txt"), "--out", str(out), "--screen"]
+    assert cli.main(args + [str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert f"report --screen: {bad}: expected bench/bench_sensitivity.py's record" in err
+    assert "missing: ['commit', 'profile', 'date', 'step']" in err
+    assert cli.main(args + [str(tmp_path / "none.json")]) == 2
+    assert "no such file" in capsys.readouterr().err
+    assert not out.exists()
