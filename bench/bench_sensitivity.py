@@ -94,7 +94,7 @@ def main() -> None:
         results = pool.map(_run, jobs, chunksize=1)
     curves = {(c, n): (u, F, s) for c, n, u, F, s in results}
     u = np.linspace(0.0, cfg["three_point"]["deflection"], 301)
-    rows, table = [], {}
+    rows, table, record = [], {}, []
     for case, (windows, names) in CASES.items():
         u0, F0, _ = curves[(case, None)]
         F0 = np.interp(u, u0, F0)
@@ -104,6 +104,8 @@ def main() -> None:
             den = abs(ABSOLUTE.get(name, STEP))
             S = {w: window_sensitivity(u, F0, F1, pipe[w], den) for w in windows}
             table[f"{case}/{name}"] = S
+            record.append({"case": case, "input": name,
+                           "S": {w.replace("_window", ""): round(v, 4) for w, v in S.items()}})
             cells = " | ".join(f"{w.replace('_window', '')} {S[w]:.3f}" for w in windows)
             rows.append(f"| {case} | {name} | {cells} |")
             print(rows[-1], flush=True)
@@ -121,18 +123,15 @@ means the window's curve barely sees the input.
 """ + "\n".join(rows) + "\n"
     tail = section_tail(HEADING)          # the notes by hand stay
     write_section(HEADING, text + ("\n" + tail + "\n" if tail else ""))
-    write_record(args.profile, step, table)
+    write_record(args.profile, step, record)
     print(json.dumps(table, indent=1))
 
 
-def write_record(profile: str, step: str, table: dict) -> None:
-    """bench/sensitivity.json: the screen's S per case, input and window, with what it was
-    run on, for the pipeline's report."""
+def write_record(profile: str, step: str, rows: list[dict]) -> None:
+    """bench/sensitivity.json: the screen's S per case, input and window (``rows``), with what
+    it was run on, for the pipeline's report."""
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True, cwd=RECORD.parent).stdout.strip()
-    rows = [{"case": key.split("/")[0], "input": key.split("/")[1],
-             "S": {w.replace("_window", ""): round(v, 4) for w, v in S.items()}}
-            for key, S in table.items()]
     RECORD.write_text(json.dumps({
         "profile": profile, "commit": commit, "date": datetime.date.today().isoformat(),
         "step": f"+{100 * STEP:.0f} % ({step})", "rows": rows}, indent=1) + "\n")
