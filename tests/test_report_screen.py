@@ -42,6 +42,9 @@ def test_a_broken_record_is_refused_naming_the_file_and_the_field(tmp_path):
     path = _record(tmp_path, rows=[{"case": "cwb19_t2_closed", "S": 0.2}])
     with pytest.raises(ValueError, match=r"rows \[0\] are not so"):
         screen.read_record(path)
+    path = _record(tmp_path, rows=3)
+    with pytest.raises(ValueError, match="rows is not a list"):
+        screen.read_record(path)
     path.write_text("{not json")
     with pytest.raises(ValueError, match="it is not JSON"):
         screen.read_record(path)

@@ -34,6 +34,8 @@ def read_record(path: Path | None) -> dict | None:
         raise ValueError(f"{expected}; it is not JSON ({exc})") from None
     if not isinstance(record, dict) or any(k not in record for k in FIELDS):
         raise ValueError(f"{expected}; missing: {[k for k in FIELDS if k not in record]}")
+    if not isinstance(record["rows"], list):
+        raise ValueError(f"{expected}; rows is not a list")
     bad = [i for i, row in enumerate(record["rows"])
            if not (isinstance(row, dict) and {"case", "input", "S"} <= row.keys()
                    and isinstance(row["S"], dict))]
