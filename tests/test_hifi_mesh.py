@@ -91,7 +91,9 @@ def test_38_wires_need_the_larger_tube(config):
     m = build_mesh({**case, "d_i": 15.0, "d_o": 18.4}, config, RES)
     assert m.n_wires == 38
     extra = m.wire_yz[-1]
-    assert extra[0] == pytest.approx(-3 * 1.4014) and np.hypot(*extra) == pytest.approx(2 * np.sqrt(3) * 1.4014)
+    phi = np.degrees(np.arctan2(-extra[1], extra[0]))           # the lowest site, turned with the pack
+    assert phi == pytest.approx(150.0 + config["hifi"]["build"]["pack_angle"])
+    assert np.hypot(*extra) == pytest.approx(2 * np.sqrt(3) * 1.4014)
     assert m.info["clearance"] > 0
 
 

@@ -38,6 +38,7 @@ RULES = {
     **{k: ("a penalty factor", 0.0, False, 4.0, False) for k in ("penalty", "penalty_layers")},
     "search_margin": ("a search margin [mm]", 0.0, False, None, False),
     "tie_damping": ("a fraction of critical damping", 0.0, True, 1.0, False),
+    "pack_angle": ("a turn of the wire pack [deg]", 0.0, True, 30.0, False),
     "wire_fill": ("a fraction", 0.0, True, 1.0, False),
     "tube_closure": ("a fraction", 0.0, True, 1.0, False),
     "sleeve_closure": ("a fraction", 0.0, True, 1.0, False),

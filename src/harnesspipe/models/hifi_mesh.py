@@ -22,7 +22,7 @@ from harnesspipe.models.hifi_mesh_parts import (  # noqa: F401 -- constants re-e
     GROUP_COVERING, GROUP_END_LEFT, GROUP_END_RIGHT, GROUP_HELIX, PART_FABRIC, PART_NAMES,
     PART_TAPE, PART_TUBE, TIE_COVERING, TIE_TAPE, TIE_WIRES, WIRE_CLEARANCE, Sample, ShellPart,
     WireBeams, covering, end_band, fabric_shell, helix_strip, phi_of, quad_area, spread_bundle,
-    tube_shell, wire_beams, wire_bundle)
+    tube_shell, turn_bundle, wire_beams, wire_bundle)
 
 __all__ = ["HifiMesh", "build_mesh", "element_sizes", "coverage", "outer_surface_radius",
            "to_meshio", "write_vtu", "PRESETS", "PART_TUBE", "PART_TAPE", "PART_FABRIC",
@@ -196,10 +196,11 @@ def build_mesh(case: dict, config: dict, resolution: dict | str = "quick") -> Hi
     res = _resolution(resolution)
     sample = Sample.from_config(config, case)
     taping = _check_case(case, config, res, sample)
-    bundle = wire_bundle(case, config)
+    build = config["hifi"]["build"]
+    bundle = turn_bundle(wire_bundle(case, config), build["pack_angle"])
     cov = covering(case, config, bundle, sample.t_tape)
     if cov.kind != "none":
-        bundle = spread_bundle(bundle, cov.inner_min(), config["hifi"]["build"]["wire_fill"])
+        bundle = spread_bundle(bundle, cov.inner_min(), build["wire_fill"])
     wires = wire_beams(bundle, *sample.x_sample, int(res["wire_elements"]))
     parts = _MeshParts(wires)
     xc = np.linspace(*sample.x_tube, int(res["tube_axial"]) + 1)

@@ -3,7 +3,8 @@
 :func:`harnesspipe.models.hifi_mesh.build_mesh` numbers and assembles them; the choices
 behind each part (where the paper is silent) are listed in that module's docstring.
 
-* :func:`wire_bundle`: the bundle's cross-section, hexagonally packed wires of pitch d;
+* :func:`wire_bundle`: the bundle's cross-section, hexagonally packed wires of pitch d,
+  :func:`turn_bundle` (its orientation), :func:`spread_bundle` (its fill of the covering);
   :func:`wire_beams`: their beam elements along the sample (nodes 0 .. first).
 * :func:`covering`: the covering's radii around the bundle (:class:`Covering`);
   :func:`tube_shell` (closed or open tube), :func:`fabric_shell` (spiral sheet).
@@ -220,6 +221,21 @@ def spread_bundle(bundle: WireBundle, r_inner: float, fill: float) -> WireBundle
     yz = bundle.yz * scale
     r_bundle = float(np.max(np.hypot(yz[:, 0], yz[:, 1]) + bundle.radius))
     return WireBundle(yz, bundle.wire_type, bundle.radius, bundle.pitch * scale, r_bundle)
+
+
+def turn_bundle(bundle: WireBundle, angle: float) -> WireBundle:
+    """The bundle's cross-section turned about its axis by ``angle`` degrees (``phi`` of every
+    wire grows by it): the pack's orientation in the test, a build state the paper does not
+    give.  At 0 (and every 30) the packed lattice is mirror-symmetric about the loading plane
+    (x, y); a wire pushed sideways under the feeder then has no side to go to, and which side
+    it takes, and when, is decided by round-off (bench/RESULTS.md 'The wire pack's mirror
+    symmetry').  A turn of a few degrees decides it by the geometry: a seed imperfection."""
+    if angle == 0.0:
+        return bundle
+    a = np.radians(angle)
+    y, z = bundle.yz[:, 0], bundle.yz[:, 1]
+    yz = np.column_stack([y * np.cos(a) + z * np.sin(a), z * np.cos(a) - y * np.sin(a)])
+    return WireBundle(yz, bundle.wire_type, bundle.radius, bundle.pitch, bundle.r_bundle)
 
 
 def wire_beams(bundle: WireBundle, x0: float, x1: float, n_el: int) -> WireBeams:
