@@ -14,7 +14,7 @@ chain's tie (the standard error of the measured mean, a few N): a spread far bel
 move a pick.
 
 The state is the one the chain met when its tension pick moved between two runs (bench/RESULTS.md
-'The wire pack's mirror symmetry'): 5.33 wraps, tape tension 1.5279 N, the start interface;
+'Hi-fi outcome against the last bits', by hand): 5.33 wraps, tape tension 1.5279 N, the start interface;
 ``--table2`` gives the tensile stage's coverings (default: bench/last_bits_table2.csv, the
 Table 2 of the quick pipeline's tensile fits in which the pick moved, session 30).  Each run is one
 Numba thread; two run side by side.

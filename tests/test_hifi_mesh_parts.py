@@ -151,7 +151,7 @@ def test_the_configs_pack_is_no_mirror_image_of_itself(config):
     """The default build turns the pack (config hifi.build.pack_angle) so that the mesh's wires
     are no mirror image of themselves about the loading plane, by far more than round-off: a
     sideways shift of the top wires under the feeder is decided by the geometry (at 0 it was
-    decided by the last bits of the inputs; bench/RESULTS.md 'The wire pack's mirror symmetry')."""
+    decided by the last bits of the inputs; bench/RESULTS.md 'Hi-fi outcome against the last bits')."""
     mesh = build_mesh(_case(config, "cwb19_t2_closed"), config, RES)
     assert config["hifi"]["build"]["pack_angle"] > 0.0
     assert _mirror_offset(mesh.wire_yz) > 0.05                       # mm, against ~1e-15 of round-off

@@ -228,8 +228,8 @@ def turn_bundle(bundle: WireBundle, angle: float) -> WireBundle:
     wire grows by it): the pack's orientation in the test, a build state the paper does not
     give.  At 0 (and every 30) the packed lattice is mirror-symmetric about the loading plane
     (x, y); a wire pushed sideways under the feeder then has no side to go to, and which side
-    it takes, and when, is decided by round-off (bench/RESULTS.md 'The wire pack's mirror
-    symmetry').  A turn of a few degrees decides it by the geometry: a seed imperfection."""
+    it takes, and when, is decided by round-off (bench/RESULTS.md 'Hi-fi outcome against the
+    last bits').  A turn of a few degrees decides it by the geometry: a seed imperfection."""
     if angle == 0.0:
         return bundle
     a = np.radians(angle)
