@@ -9,7 +9,7 @@ For each calibration case of the chain (Sec. 4.2: the closed and the half-lap CW
 friction and cohesive steps, the t2 fabric CWB for E2/E1) and each input, one virtual test
 with the input moved by STEP (relative; the build state's ``wire_fill`` and ``tape_tension``
 by an absolute step, their defaults being 0, the closures down by one, their defaults being the
-upper bound 1) against the base run at the config's start values (a build input at the chain's
+upper bound 1, ``pack_angle`` by 2 deg) against the base run at the config's start values (a build input at the chain's
 start: :func:`harnesspipe.stages.chain_settings.build_start`) and the paper's Table 2.  The normalised sensitivity of a window is
 
     S = (||F' - F|| / ||F||) / (dp / p)     (l2 over the measured grid inside the window)
@@ -35,9 +35,10 @@ from benchlib import section_tail, write_section
 HEADING = "## Hi-fi sensitivity screen"
 STEP = 0.25                    # relative step of an interface input
 ABSOLUTE = {"wire_fill": 0.5, "tape_tension": 2.0,      # defaults 0: absolute steps (fill, N)
-            "tube_closure": -0.5, "sleeve_closure": -0.5}  # defaults 1, the upper bound: down
+            "tube_closure": -0.5, "sleeve_closure": -0.5,  # defaults 1, the upper bound: down
+            "pack_angle": 2.0}                             # deg, from the 1 deg seed turn
 RECORD = Path(__file__).resolve().parent / "sensitivity.json"
-COMMON = ("wire_fill", "tape_tension", "mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d")
+COMMON = ("pack_angle", "wire_fill", "tape_tension", "mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d")
 CASES = {                      # calibration case -> (its windows, the inputs that can act on it)
     "cwb19_t2_closed": (("friction_window", "cohesive_window"), ("end_tape_layers",) + COMMON),
     "cwb19_t2_open_halflap": (("friction_window", "cohesive_window"),
@@ -115,7 +116,8 @@ def main() -> None:
 `bench/bench_sensitivity.py --profile {args.profile}`: each input the chain could fit moved by
 +{100 * STEP:.0f} % ({step}) from the config's start values, the paper's Table 2 coverings; S
 = relative l2 change of the curve in the window / relative change of the input (absolute for
-wire_fill, per unit fill, tape_tension, per N, and the closures, per unit closure).  S below ~0.05
+wire_fill, per unit fill, tape_tension, per N, the closures, per unit closure, and pack_angle,
+per deg).  S below ~0.05
 means the window's curve barely sees the input.
 
 | case | input | S per window |
