@@ -184,35 +184,46 @@ def test_flat_screen_ends_nelder_mead_after_its_first_simplex(tmp_path):
     assert rejected.nfev > 4
 
 
-def test_a_search_rests_at_the_near_tie_nearest_its_start(tmp_path):
+def _pick_of(trace, tie, names, penalty=np.inf):
+    """The weighted mean of a trace's rows before the last (the pick's own evaluation)."""
+    rows = trace.iloc[:-1]
+    e = rows["error"].to_numpy()
+    ok = np.isfinite(e) & (e < penalty)
+    w = np.where(ok, np.exp(-0.5 * (np.minimum((e - e[ok].min()) / tie, 40.0)) ** 2), 0.0)
+    return (w[:, None] * rows[names].to_numpy()).sum(axis=0) / w.sum()
+
+
+def test_a_search_rests_at_the_weighted_mean_of_its_evaluations(tmp_path):
     """A valley flat within 1e-6 over 0.3..0.7 (the data cannot tell those apart) tilted
-    towards 0.3: Brent alone ends near 0.3.  With the start 0.95 and a tie of 0.01 (the
-    measured mean's uncertainty) it rests at the evaluated point nearest the start among
-    those within 0.01 of the best -- on the valley's far side -- and says so; a tie that
-    takes in every evaluated point keeps the start; Nelder-Mead likewise."""
+    towards 0.3: Brent alone ends near 0.3, a threshold pick would take any of the flat
+    points.  With a tie of 0.01 (the measured mean's uncertainty) the search rests at the
+    mean of its evaluations weighted by exp(-((e - e_min)/tie)^2/2) -- inside the flat part,
+    evaluated there and logged as its last row -- and says so; Nelder-Mead likewise."""
     def valley(x):
         return 10.0 + 1e-6 * x[0] + 50.0 * max(abs(x[0] - 0.5) - 0.2, 0.0) ** 2
 
     bare = hcal.bounded_fit(valley, "T", (0.0, 1.0), xatol=1e-5, maxfev=60, keep=0.95)
-    assert bare.x[0] < 0.35
-    tied = hcal.bounded_fit(valley, "T", (0.0, 1.0), xatol=1e-5, maxfev=60, keep=0.95, tie=0.01)
-    trace = tied.trace
-    near = trace[trace["error"] <= trace["error"].min() + 0.01]
-    assert tied.x[0] == near["T"].iloc[int(np.argmin(np.abs(near["T"] - 0.95)))]
-    assert 0.6 < tied.x[0] <= 0.7 + np.sqrt(0.01 / 50.0) and "nearest the start" in tied.message
-    assert tied.fun <= trace["error"].min() + 0.01
-    everything = hcal.bounded_fit(valley, "T", (0.0, 1.0), xatol=1e-5, maxfev=60, keep=0.95, tie=1e3)
-    assert everything.x[0] == 0.95
+    assert bare.x[0] < 0.35 and bare.nfev == len(bare.trace)
+    tied = hcal.bounded_fit(valley, "T", (0.0, 1.0), xatol=1e-5, maxfev=60, keep=0.95, tie=0.01,
+                            log_path=tmp_path / "brent.h5")
+    assert tied.x[0] == pytest.approx(_pick_of(tied.trace, 0.01, ["T"])[0], rel=1e-12)
+    assert 0.3 < tied.x[0] < 0.7 and "weighted by" in tied.message
+    assert (tied.trace["T"].iloc[-1], tied.trace["error"].iloc[-1]) == (tied.x[0], tied.fun)
+    assert tied.fun == valley(tied.x)
 
     def bowl(x):
         return 5.0 + float(np.sum((x - np.array([2.0, 1.0])) ** 2))
 
     simplex = hcal.simplex_fit(bowl, {"a": 1.0, "b": 2.0}, xatol=1e-6, fatol=1e-9, maxfev=200,
                                keep_start=True, tie=0.5)
-    assert simplex.fun <= 5.0 + 0.5 and simplex.fun > 5.0 + 1e-3   # moved off the minimum ...
-    tr = simplex.trace[simplex.trace["error"] <= simplex.trace["error"].min() + 0.5]
-    d = np.hypot((tr["a"] - 1.0) / 1.0, (tr["b"] - 2.0) / 2.0)
-    assert np.hypot(simplex.x[0] - 1.0, (simplex.x[1] - 2.0) / 2.0) == pytest.approx(d.min())  # ... to the start's nearest
+    np.testing.assert_allclose(simplex.x, _pick_of(simplex.trace, 0.5, ["a", "b"]), rtol=1e-12)
+    np.testing.assert_array_equal(simplex.trace[["a", "b"]].iloc[-1], simplex.x)
+    assert simplex.fun == bowl(simplex.x) < 5.0 + 0.5      # near the minimum, off it by the flat
+    # the rest is replayed from the log on a rerun, not run again
+    calls = []
+    again = hcal.bounded_fit(lambda x: calls.append(1) or valley(x), "T", (0.0, 1.0), xatol=1e-5,
+                             maxfev=60, keep=0.95, tie=0.01, log_path=tmp_path / "brent.h5")
+    assert calls == [] and again.x[0] == tied.x[0] and again.fun == tied.fun
 
 
 def test_failed_run_is_a_logged_rejected_point(tmp_path):
@@ -350,7 +361,8 @@ def test_fit_step_screens_against_the_scatter_of_the_measured_mean(tmp_path, fak
     replicates +-20 % put the standard error of the mean at 0.22 ||u||: not identifiable,
     the step ends after 2 evaluations and says so; +-5 % (0.055 ||u||) or the screen off
     (flat_factor 0): the search goes on, to the bound 0.3 -- with the screen on it rests at
-    the evaluated point nearest the start within 0.055 ||u|| of the best."""
+    the mean of its evaluations weighted on the scale 0.055 ||u||, below the bound, and
+    evaluates it as its last logged point."""
     u = np.linspace(0.0, 30.0, 101)
     refs = {"cwb19_t2_closed": write_prepared(tmp_path / "closed.h5", "cwb19_t2_closed",
                                               fake.force(u, fake.TRUTH, "closed_tube"), u, scatter=scatter)}
@@ -366,8 +378,10 @@ def test_fit_step_screens_against_the_scatter_of_the_measured_mean(tmp_path, fak
         assert fit["parameters"]["mu_rtb"] == 0.2 and "start value is kept" in fit["message"]
     elif flat_factor == 0.0:
         assert fit["parameters"]["mu_rtb"] == pytest.approx(0.3, abs=2e-3)
-    else:            # the search went to the bound; it rests at the point nearest the start within the tie
-        assert 0.2 < fit["parameters"]["mu_rtb"] < 0.3 - 2e-3 and "nearest the start" in fit["message"]
+    else:            # the search went to the bound; it rests at the weighted pick, run there
+        assert 0.2 < fit["parameters"]["mu_rtb"] < 0.3 - 2e-3 and "weighted by" in fit["message"]
+        with h5py.File(tmp_path / "fit" / "trace.h5") as f:
+            assert f["x"][-1, 0] == fit["parameters"]["mu_rtb"] and f["x"].shape[0] == fit["nfev"]
 
 
 def test_flat_screen_is_not_fooled_by_rejected_points():

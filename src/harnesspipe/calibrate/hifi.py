@@ -25,7 +25,8 @@ from scipy.optimize import minimize_scalar
 
 from harnesspipe.calibrate.objective import l2_error, on_grid
 from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, check_stop,
-                                           logged_call, nelder_mead, settled, stopped_at)
+                                           logged_call, nelder_mead, rest_at_pick,
+                                           stopped_at)
 
 REJECT_FACTOR = 10.0
 #: a simulated curve may end this fraction of the window's end short of it (the feeder stops
@@ -168,13 +169,15 @@ def read_rejected(path: Path, key: str | None = None) -> list[dict]:
 
 
 def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, key="",
-                maxfev: int = 30, stop=None, keep: float | None = None, tie: float = 0.0) -> FitResult:
+                maxfev: int = 30, stop=None, keep: float | None = None, tie: float = 0.0,
+                penalty: float = np.inf) -> FitResult:
     """Brent's bounded search for one parameter, every evaluation logged (and replayed).
-    ``stop``, ``keep``, ``tie``: as in :func:`harnesspipe.calibrate.simplex.nelder_mead`.
-    The start value ``keep``, when given, is evaluated first: the stop rule compares it with
-    Brent's first points (a start the data tell apart from them is no near tie), and the
-    result is the logged point nearest it among those within ``tie`` of the best error
-    (:func:`harnesspipe.calibrate.simplex.settled`)."""
+    ``stop``, ``keep``, ``tie``, ``penalty``: as in
+    :func:`harnesspipe.calibrate.simplex.nelder_mead`.  The start value ``keep``, when given,
+    is evaluated first: the stop rule compares it with Brent's first points (a start the
+    data tell apart from them is no near tie).  With ``tie`` > 0 a search that runs its
+    course rests at the weighted pick of its evaluations
+    (:func:`harnesspipe.calibrate.simplex.rest_at_pick`, resolution ``xatol``)."""
     log = EvaluationLog(log_path, [name], key)
 
     def wrapped(c):
@@ -188,10 +191,9 @@ def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, ke
         res = minimize_scalar(wrapped, bounds=tuple(bounds), method="bounded",
                               options={"xatol": xatol, "maxiter": maxfev})
         x, fun, converged, message = [res.x], float(res.fun), bool(res.success), str(res.message)
-        if keep is not None:
-            x, fun, moved = settled(log, [keep], tie)
-            if moved and tie > 0.0:
-                message += f"; the point nearest the start within {tie:.3g} of the best error is kept"
+        if tie > 0.0:
+            x, fun, how = rest_at_pick(log, objective, tie, xatol, penalty=penalty)
+            message = f"{message}; {how}"
     except StopSearch as reason:
         x, fun, kept = stopped_at(log, objective, None if keep is None else [keep])
         converged, message = False, f"{reason}; {kept}"
@@ -200,15 +202,17 @@ def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, ke
 
 
 def simplex_fit(objective, x0: dict, *, xatol: float, fatol: float, maxfev: int, log_path=None,
-                key="", stop=None, keep_start: bool = False, tie: float = 0.0) -> FitResult:
+                key="", stop=None, keep_start: bool = False, tie: float = 0.0,
+                penalty: float = np.inf) -> FitResult:
     """The paper's Nelder-Mead (+5 % simplex) on several parameters; ``keep_start``: a
-    search its ``stop`` rule ends rests at ``x0``, one that ends otherwise at the logged
-    point nearest ``x0`` within ``tie`` of the best error."""
+    search its ``stop`` rule ends rests at ``x0``; ``tie`` > 0: one that runs its course
+    rests at the weighted pick of its evaluations
+    (:func:`harnesspipe.calibrate.simplex.rest_at_pick`)."""
     names = list(x0)
     start = np.array([x0[k] for k in names])
     return nelder_mead(objective, start, names, xatol=xatol, fatol=fatol, maxfev=maxfev,
                        log_path=log_path, key=key, stop=stop, keep=start if keep_start else None,
-                       tie=tie)
+                       tie=tie, penalty=penalty)
 
 
 def flat_screen(n_first: int, floor: float, penalty: float = np.inf):

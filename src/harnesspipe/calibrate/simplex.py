@@ -123,20 +123,58 @@ def best_logged(log: EvaluationLog) -> tuple[np.ndarray, float]:
     return log.rows[i][0], float(errors[i])
 
 
-def settled(log: EvaluationLog, keep, tie: float, scale=None) -> tuple[np.ndarray, float, bool]:
-    """(x, error, moved off the best): of the logged points whose error is within ``tie`` of
-    the smallest, the one nearest the start ``keep`` (distance in x / ``scale``; equal
-    distances: the smaller error, then the smaller x).  Errors closer than the uncertainty of
-    the measured mean do not tell points apart, and which of them comes out best can hinge on
-    the last bits of the runs (explicit dynamics differs between CPUs in those); the start,
-    a documented value, is where the data must move the fit from.  ``tie`` 0: the best."""
+#: errors more than this many ties above the best weigh exp(-800), which is 0 in double
+PICK_CLIP = 40.0
+
+
+def pick_weights(errors, tie: float, penalty: float = np.inf) -> np.ndarray:
+    """w_i = exp(-((e_i - e_min) / tie)^2 / 2) of the errors ``e_i``; a rejected point (error
+    not finite or at least ``penalty``) weighs 0.  Continuous in every error: a point whose
+    error moves by a little changes its weight by a little, wherever the best one lies."""
+    e = np.asarray(errors, dtype=float)
+    ok = np.isfinite(e) & (e < penalty)
+    w = np.zeros_like(e)
+    if ok.any():
+        z = np.minimum((e[ok] - e[ok].min()) / tie, PICK_CLIP)
+        w[ok] = np.exp(-0.5 * z ** 2)
+    return w
+
+
+def weighted_pick(log: EvaluationLog, tie: float, penalty: float = np.inf) -> np.ndarray:
+    """The mean of the logged points weighted by :func:`pick_weights` of their errors.
+
+    Errors closer than ``tie`` (the uncertainty of the measured mean) do not tell points
+    apart, and which of them comes out lowest can hinge on the last bits of the runs
+    (explicit dynamics differs between CPUs in those).  A pick by a threshold -- the best
+    point, or the one nearest the start among those within ``tie`` of the best -- jumps
+    when an error crosses it; this mean moves continuously with the errors."""
+    w = pick_weights([r[1] for r in log.rows], tie, penalty)
+    if not w.sum() > 0.0:
+        raise ValueError("no admitted evaluation to pick from")
+    x = np.array([r[0] for r in log.rows])
+    return (w[:, None] * x).sum(axis=0) / w.sum()
+
+
+def rest_at_pick(log: EvaluationLog, objective, tie: float, resolution: float, scale=None,
+                 penalty: float = np.inf) -> tuple[np.ndarray, float, str]:
+    """(x, error, words) where a search that ran its course rests: at the :func:`weighted_pick`
+    of its evaluations, evaluated there and logged (its run is the fit's run); at the admitted
+    evaluated point nearest it instead when that lies within ``resolution`` (max norm of the
+    difference / ``scale``), the search's own resolution.  If the run at the pick is rejected,
+    at the best logged point."""
+    x_w = weighted_pick(log, tie, penalty)
+    scale = np.ones_like(x_w) if scale is None else np.asarray(scale, dtype=float)
+    admitted = [(float(np.max(np.abs((x - x_w) / scale))), err, tuple(x)) for x, err, _ in log.rows
+                if np.isfinite(err) and err < penalty]
+    d, err, x = min(admitted)
+    how = f"the mean of the evaluated points weighted by exp(-((e - e_min)/{tie:.3g} N)^2/2)"
+    if d <= resolution:
+        return np.array(x), float(err), f"rests at the evaluated point nearest {how}"
+    err = logged_call(log, objective, x_w)
+    if np.isfinite(err) and err < penalty:
+        return x_w, float(err), f"rests at {how}, evaluated there"
     x_best, best = best_logged(log)
-    keep = np.asarray(keep, dtype=float)
-    scale = np.ones_like(keep) if scale is None else np.asarray(scale, dtype=float)
-    near = [(float(np.linalg.norm((x - keep) / scale)), err, tuple(x)) for x, err, _ in log.rows
-            if np.isfinite(err) and err <= best + tie]
-    _, err, x = min(near)
-    return np.array(x), float(err), not np.array_equal(np.array(x), x_best)
+    return x_best, best, f"the run at {how} was rejected; the best point is kept"
 
 
 def stopped_at(log: EvaluationLog, objective, keep) -> tuple[np.ndarray, float, str]:
@@ -178,7 +216,8 @@ def evaluate_logged(objective, x0, names, *, log_path=None, key="") -> FitResult
 
 def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
                 log_path=None, key="", restarts=0, start_scaling=None,
-                step=SIMPLEX_STEP, stop=None, keep=None, tie: float = 0.0) -> FitResult:
+                step=SIMPLEX_STEP, stop=None, keep=None, tie: float = 0.0,
+                penalty: float = np.inf) -> FitResult:
     """Minimise ``objective(x) -> float`` by Nelder-Mead from the paper's simplex.
 
     ``xatol`` is relative to ``x0`` (the search runs on x / x0, so parameters of
@@ -195,8 +234,9 @@ def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
     ``stop(rows) -> reason | None``, asked after every evaluation with the logged rows
     (parameters, error, wall time): a reason ends the search at once, at the best point
     so far (or at ``keep``, see :func:`stopped_at`), with the reason as its message.
-    ``tie`` > 0 with ``keep``: a search that ends rests at the logged point nearest ``keep``
-    among those within ``tie`` of the best error (:func:`settled`).
+    ``tie`` > 0: a search that runs its course rests at the mean of its evaluations weighted
+    by how close their errors come to the best, on the scale ``tie`` (:func:`rest_at_pick`,
+    resolution ``xatol``; errors at or above ``penalty`` weigh nothing).
     ``key`` identifies the objective (e.g. a hash of its data and settings): a log
     written under another key is discarded instead of replayed.
     """
@@ -228,13 +268,12 @@ def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
             converged, message = bool(res.success), str(res.message)
             if improved <= fatol:
                 break
-        if keep is not None and tie > 0.0:
-            x_near, best, moved = settled(log, keep, tie, scale)
-            z = x_near / scale
-            if moved:
-                message += f"; the point nearest the start within {tie:.3g} of the best error is kept"
+        x = z * scale
+        if tie > 0.0:
+            x, best, how = rest_at_pick(log, objective, tie, xatol, scale, penalty)
+            message = f"{message}; {how}"
     except StopSearch as reason:
-        x_best, best, kept = stopped_at(log, objective, keep)
-        z, converged, message = x_best / scale, False, f"{reason}; {kept}"
-    return FitResult(names=list(names), x=z * scale, fun=best, nfev=len(log.rows),
+        x, best, kept = stopped_at(log, objective, keep)
+        converged, message = False, f"{reason}; {kept}"
+    return FitResult(names=list(names), x=x, fun=best, nfev=len(log.rows),
                      converged=converged, message=message, trace=log.frame())

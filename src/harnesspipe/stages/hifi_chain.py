@@ -338,10 +338,11 @@ def _search(step, settings, objective, names, fixed, live, key, floor):
     """The bounded search (one parameter) or Nelder-Mead (several) of a fit step, with the
     identifiability screen :func:`hcal.flat_screen` at ``floor`` x ``flat_factor`` over the
     start and the first points; a search the screen ends keeps the start values (``fixed``),
-    whatever its first points gave; one that ends otherwise rests at the evaluated point
-    nearest the start values among those within the same tolerance of the best error
-    (:func:`harnesspipe.calibrate.simplex.settled`: which of such near ties comes out best
-    could hinge on the runs' last bits)."""
+    whatever its first points gave; one that runs its course rests at the mean of its
+    evaluations weighted by exp(-((e - e_min)/tie)^2/2), tie the same tolerance, evaluated
+    there (:func:`harnesspipe.calibrate.simplex.rest_at_pick`): a pick that moves
+    continuously with the errors, where a threshold's pick could hinge on the runs' last
+    bits."""
     log = live / "evaluations.h5"
     floor = floor * float(settings.get("flat_factor", 0.0))
     if settings["method"] == "bounded":
@@ -350,12 +351,13 @@ def _search(step, settings, objective, names, fixed, live, key, floor):
         return hcal.bounded_fit(objective, names[0], settings["bounds"], xatol=settings["xatol"],
                                 log_path=log, key=key, maxfev=settings["maxfev"],
                                 stop=hcal.flat_screen(3, floor, objective.penalty),
-                                keep=float(fixed[names[0]]), tie=floor)
+                                keep=float(fixed[names[0]]), tie=floor,
+                                penalty=objective.penalty)
     if settings["method"] == "simplex":
         return hcal.simplex_fit(objective, {k: fixed[k] for k in names}, xatol=settings["xatol"],
                                 fatol=settings["fatol"], maxfev=settings["maxfev"], log_path=log, key=key,
                                 stop=hcal.flat_screen(len(names) + 1, floor, objective.penalty),
-                                keep_start=True, tie=floor)
+                                keep_start=True, tie=floor, penalty=objective.penalty)
     raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex")
 
 
