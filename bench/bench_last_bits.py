@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchlib import section_tail, write_section
+from benchlib import hifi_run, section_tail, write_section
 
 HEADING = "## Hi-fi outcome against the last bits"
 ROOT = Path(__file__).resolve().parent.parent
@@ -38,15 +38,8 @@ STATE = {"end_tape_layers": 5.326237921249263, "tape_tension": 1.527864045000420
 
 def _run(job):
     """(case, profile, table2, overrides) -> (overrides, deflection, force, summary)."""
-    import os
-    os.environ["NUMBA_NUM_THREADS"] = "1"
-    from harnesspipe.config import load
-    from harnesspipe.models.hifi import three_point
-    from harnesspipe.stages.hifi import inputs
     case, profile, table2, sets = job
-    cfg = load(overrides={"profile": profile})
-    run = three_point(inputs(cfg, case, {k: repr(v) for k, v in sets.items()}, table2=Path(table2)),
-                      n_shapes=1)
+    run = hifi_run(case, profile, {k: repr(v) for k, v in sets.items()}, table2)
     c = run.curve
     return sets, c["deflection_mm"].to_numpy(), c["force_N"].to_numpy(), run.summary
 

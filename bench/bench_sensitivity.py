@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from benchlib import section_tail, write_section
+from benchlib import hifi_run, section_tail, write_section
 
 HEADING = "## Hi-fi sensitivity screen"
 STEP = 0.25                    # relative step of an interface input
@@ -50,17 +50,10 @@ CASES = {                      # calibration case -> (its windows, the inputs th
 
 def _run(job):
     """(case, input or None, profile) -> (case, input, deflection, force, summary)."""
-    import os
-    os.environ["NUMBA_NUM_THREADS"] = "1"
     from harnesspipe.config import load
-    from harnesspipe.models.hifi import three_point
-    from harnesspipe.stages.hifi import inputs
     case, name, profile = job
-    cfg = load(overrides={"profile": profile})
-    sets = {}
-    if name is not None:
-        sets[name] = str(moved(cfg, name))
-    run = three_point(inputs(cfg, case, sets), n_shapes=1)
+    sets = {} if name is None else {name: str(moved(load(overrides={"profile": profile}), name))}
+    run = hifi_run(case, profile, sets)
     c = run.curve
     return case, name, c["deflection_mm"].to_numpy(), c["force_N"].to_numpy(), run.summary
 

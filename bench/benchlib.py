@@ -52,3 +52,16 @@ def write_section(heading: str, text: str) -> None:
     nxt = old.find("\n## ", start + len(heading))
     tail = old[nxt:] if nxt >= 0 else "\n"
     RESULTS.write_text(old[:start] + text.rstrip() + "\n" + tail)
+
+
+def hifi_run(case: str, profile: str, sets: dict, table2=None):
+    """One hi-fi three-point run of ``case`` at ``profile`` with the ``--set`` values ``sets``
+    (strings) and, when given, a tensile stage's ``table2`` csv: on one Numba thread, as the
+    pipeline's virtual tests run, with one stored shape.  For a process pool's worker."""
+    os.environ["NUMBA_NUM_THREADS"] = "1"
+    from harnesspipe.config import load
+    from harnesspipe.models.hifi import three_point
+    from harnesspipe.stages.hifi import inputs
+    cfg = load(overrides={"profile": profile})
+    return three_point(inputs(cfg, case, sets, table2=None if table2 is None else Path(table2)),
+                       n_shapes=1)
