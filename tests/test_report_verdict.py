@@ -3,6 +3,7 @@ limitations generated from them, a table of contents whose anchors exist, links 
 raw data and repeated runs folded away; physical names; readable figures."""
 from __future__ import annotations
 
+import html
 import json
 import re
 from pathlib import Path
@@ -280,3 +281,19 @@ def test_a_chain_on_another_mesh_is_said(tree):
         quick = cfg["hifi"]["pipeline"]["budgets"]["quick"]
         assert (f"with its budget (hi-fi searches stop after {quick['bounded_maxfev']} (bounded)" in text) is said
         assert bool(report_html._chain_mesh_note(cfg)) is said
+
+
+def test_a_step_says_where_its_search_rests(tree):
+    """A step whose search ran its course says it rests at the weighted pick and on what
+    scale; a screened one says why it kept its start, and nothing of a pick."""
+    fit_json = tree["res"] / "hifi" / "chain" / "mu_rtb" / "fit.json"
+    pick = ("rests at the mean of the evaluated points weighted by exp(-((e - e_min)/1.63 N)^2/2), "
+            "evaluated there")
+    fit_json.write_text(json.dumps({**json.loads(fit_json.read_text()), "converged": False,
+                                    "message": f"Maximum number of function calls reached.; {pick}"}))
+    _, text = _build(tree)
+    step = text[text.index("id='calibration-step-mu-rtb'"):text.index("id='calibration-step-cohesive'")]
+    assert f"The fit {html.escape(pick)} (the scale: the standard error of the measured mean" in step
+    assert "(search stopped at its budget of evaluations" in step
+    cohesive = text[text.index("id='calibration-step-cohesive'"):]
+    assert "not identifiable" in cohesive[:2000] and "The fit rests at" not in cohesive[:2000]

@@ -658,11 +658,25 @@ class _HifiContext:
     cost: _HifiCost = field(default_factory=_HifiCost)
 
 
+def _pick_words(message: str) -> str:
+    """The part of a fit's message that says where its search rests
+    (:func:`harnesspipe.calibrate.simplex.rest_at_pick`), as a sentence; "" if none."""
+    part = next((p for p in message.split("; ") if p.startswith("rests at") or "was rejected" in p), "")
+    if not part:
+        return ""
+    return (f" The fit {html.escape(part)} (the scale: the standard error of the measured mean, "
+            "l2 over the window; points the data do not tell apart share the weight).")
+
+
 def _step_text(fit: dict, paper: dict, cfg: dict) -> str:
     """Heading, method, window, error, cost and fitted values of one calibration step."""
-    status = "" if fit.get("converged") else ' <span class="bad">(search did not converge)</span>'
-    if "not identifiable" in fit.get("message", ""):
-        status = f' <span class="bad">{html.escape(fit["message"])}.</span>'
+    message = fit.get("message", "")
+    ended = ("stopped at its budget of evaluations (hifi.pipeline.budgets)"
+             if message.startswith("Maximum number of function") else "did not converge")
+    status = "" if fit.get("converged") else f' <span class="bad">(search {ended})</span>'
+    if "not identifiable" in message:
+        status = f' <span class="bad">{html.escape(message)}.</span>'
+    status += _pick_words(message)
     cases = "; ".join(labelled(c, cfg) for c in fit.get("cases", []))
     text = (f"<h3>Calibration step {html.escape(fit['item'])}</h3><p>{html.escape(fit.get('method', ''))} "
             f"on {html.escape(cases)}, deflection window "
