@@ -204,6 +204,10 @@ def test_a_search_rests_at_the_weighted_mean_of_its_evaluations(tmp_path):
 
     bare = hcal.bounded_fit(valley, "T", (0.0, 1.0), xatol=1e-5, maxfev=60, keep=0.95)
     assert bare.x[0] < 0.35 and bare.nfev == len(bare.trace)
+    # no tie: the best logged point, the start included (evaluated before Brent's own points)
+    at_start = hcal.bounded_fit(lambda x: (x[0] - 0.95) ** 2, "T", (0.0, 1.0), xatol=0.1, maxfev=3,
+                                keep=0.95)
+    assert (at_start.x[0], at_start.fun) == (0.95, 0.0)
     tied = hcal.bounded_fit(valley, "T", (0.0, 1.0), xatol=1e-5, maxfev=60, keep=0.95, tie=0.01,
                             log_path=tmp_path / "brent.h5")
     assert tied.x[0] == pytest.approx(_pick_of(tied.trace, 0.01, ["T"])[0], rel=1e-12)

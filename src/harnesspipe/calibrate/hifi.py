@@ -24,8 +24,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from harnesspipe.calibrate.objective import l2_error, on_grid
-from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, check_stop,
-                                           logged_call, nelder_mead, rest_at_pick,
+from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, best_logged,
+                                           check_stop, logged_call, nelder_mead, rest_at_pick,
                                            stopped_at)
 
 REJECT_FACTOR = 10.0
@@ -194,6 +194,8 @@ def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, ke
         if tie > 0.0:
             x, fun, how = rest_at_pick(log, objective, tie, xatol, penalty=penalty)
             message = f"{message}; {how}"
+        elif keep is not None:     # the start, evaluated before Brent, may be the best point
+            x, fun = best_logged(log)
     except StopSearch as reason:
         x, fun, kept = stopped_at(log, objective, None if keep is None else [keep])
         converged, message = False, f"{reason}; {kept}"
