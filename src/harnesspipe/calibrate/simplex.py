@@ -127,12 +127,18 @@ def best_logged(log: EvaluationLog) -> tuple[np.ndarray, float]:
 PICK_CLIP = 40.0
 
 
+def admitted(errors, penalty: float = np.inf) -> np.ndarray:
+    """Which errors are of runs that count: finite and below ``penalty`` (a rejected run's score)."""
+    e = np.asarray(errors, dtype=float)
+    return np.isfinite(e) & (e < penalty)
+
+
 def pick_weights(errors, tie: float, penalty: float = np.inf) -> np.ndarray:
-    """w_i = exp(-((e_i - e_min) / tie)^2 / 2) of the errors ``e_i``; a rejected point (error
-    not finite or at least ``penalty``) weighs 0.  Continuous in every error: a point whose
+    """w_i = exp(-((e_i - e_min) / tie)^2 / 2) of the errors ``e_i``; a rejected point (not
+    :func:`admitted`) weighs 0.  Continuous in every error: a point whose
     error moves by a little changes its weight by a little, wherever the best one lies."""
     e = np.asarray(errors, dtype=float)
-    ok = np.isfinite(e) & (e < penalty)
+    ok = admitted(e, penalty)
     w = np.zeros_like(e)
     if ok.any():
         z = np.minimum((e[ok] - e[ok].min()) / tie, PICK_CLIP)
@@ -164,14 +170,13 @@ def rest_at_pick(log: EvaluationLog, objective, tie: float, resolution: float, s
     at the best logged point."""
     x_w = weighted_pick(log, tie, penalty)
     scale = np.ones_like(x_w) if scale is None else np.asarray(scale, dtype=float)
-    admitted = [(float(np.max(np.abs((x - x_w) / scale))), err, tuple(x)) for x, err, _ in log.rows
-                if np.isfinite(err) and err < penalty]
-    d, err, x = min(admitted)
+    d, err, x = min((float(np.max(np.abs((x - x_w) / scale))), err, tuple(x))
+                    for x, err, _ in log.rows if admitted(err, penalty))
     how = f"the mean of the evaluated points weighted by exp(-((e - e_min)/{tie:.3g} N)^2/2)"
     if d <= resolution:
         return np.array(x), float(err), f"rests at the evaluated point nearest {how}"
     err = logged_call(log, objective, x_w)
-    if np.isfinite(err) and err < penalty:
+    if admitted(err, penalty):
         return x_w, float(err), f"rests at {how}, evaluated there"
     x_best, best = best_logged(log)
     return x_best, best, f"the run at {how} was rejected; the best point is kept"
