@@ -145,8 +145,35 @@ def test_status_thresholds():
     assert verdict.statuses(se=0.05, on_bound=False, error=None, goal=None) == [verdict.ROUGH]
     assert verdict.statuses(se=0.31, on_bound=False, error=0.11, goal=0.1) == [verdict.MISMATCH,
                                                                              verdict.NOT_IDENTIFIABLE]
+    assert verdict.statuses(se=0.01, on_bound=False, error=0.105, goal=0.1, spread=0.01) == [verdict.AT_GOAL]
     assert verdict.bound_hit(0.989, (0.0, 1.0), 0.01) is None and verdict.bound_hit(0.991, (0.0, 1.0), 0.01) == 1.0
     assert verdict.bound_hit(0.05, (0.0, np.inf), 0.086) == 0.0 and verdict.bound_hit(9.0, (0.0, np.inf), 0.086) is None
+
+
+def test_an_error_within_its_spread_of_the_goal_is_neither_met_nor_missed():
+    assert [verdict.judge(e, 0.10, 0.01) for e in (0.089, 0.09, 0.095, 0.10, 0.11, 0.1101)] == [
+        verdict.MET, verdict.MET, verdict.NEAR, verdict.NEAR, verdict.NEAR, verdict.MISSED]
+    assert [verdict.judge(e, 0.10) for e in (0.10, 0.1001)] == [verdict.MET, verdict.MISSED]   # no spread
+
+
+def test_a_virtual_test_at_its_goal_is_said_so(tree):
+    summary = tree["res"] / "hifi" / "virtual" / "cwb19_t2_closed" / "summary.json"
+    payload = json.loads(summary.read_text())
+    payload["measured"]["error_rel"] = 0.105    # the closed CWB's goal is 10 %, the spread 1 point
+    summary.write_text(json.dumps(payload))
+    measured = report_html._measured_by_case(tree["prepared"])
+    rows = verdict.verdict_rows(tree["cfg"], tree["res"], tree["fits"], {}, measured)
+    assert {r.item: r.statuses for r in rows if r.stage == "hifi"} == {
+        "mu_rtb": [verdict.AT_GOAL, verdict.ON_BOUND, verdict.NO_SE],
+        "cohesive": [verdict.AT_GOAL, verdict.NOT_IDENTIFIABLE]}
+    _, page = _build(tree)
+    limits = html.unescape(page[page.index("id='limitations'"):page.index("id='parameters'")])
+    assert "does not match the bending tests" not in limits
+    assert ("1 virtual test lies within the run-to-run spread (1 point, hifi.pipeline.fidelity_spread) of "
+            "its goal, where another machine's last bits could decide met or missed: 19 x type 2, closed "
+            "tube (10.5 % against 10 %).") in limits
+    hifi = page[page.index("id='hifi'"):page.index("id='rom'")]
+    assert "goal 10 %: at the goal within the run-to-run spread (\u00b11 point)" in html.unescape(hifi)
 
 
 def test_report_leads_with_the_verdict_and_generated_limitations(tree):
@@ -197,7 +224,7 @@ def test_raw_data_and_repeats_folded_and_physical_names(tree):
     assert "<td>0.05</td><td><span class='bad'>above 0.02</span></td>" in page    # KE/IE 0.05 > 2 %
     assert "<td>0.001</td><td>within 0.01</td>" in page                           # energy balance
     assert "Below zero (contact -20 N mm; external work 300 N mm)" in page and "closes to 0.001" in page
-    assert "<td>50.0&nbsp;%</td><td><span class='bad'>above the goal 10 %</span></td>" in page
+    assert "<td>50.0&nbsp;%</td><td><span class='bad'>goal 10 %: missed by 40.0 points</span></td>" in page
     assert "Optimiser: 1 evaluation (no trace drawn)." in page and "Optimiser: 2 evaluations" in page
     assert 'alt="trace closed_tube"' in page and 'alt="trace cohesive"' not in page
     assert "Parameter correlations (Fisher" in page and "+0.50</td>" in page

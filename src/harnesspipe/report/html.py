@@ -54,7 +54,7 @@ th{background:#f3f3f3} td:first-child,th:first-child{text-align:left}
 .wide{overflow-x:auto;max-width:100%}
 .fit{display:flex;flex-wrap:wrap;gap:1em;align-items:flex-start;margin:1em 0 2em}
 .fit img,img{max-width:100%;height:auto;border:1px solid #eee} .note{color:#555;font-size:.92em}
-.bad{color:#b00} .files{font-size:.92em} code{font-size:.92em}
+.bad{color:#b00} .near{color:#8a5a00} .files{font-size:.92em} code{font-size:.92em}
 nav.toc{background:#f7f7f7;border:1px solid #ddd;padding:.4em 1em;margin:1em 0;font-size:.95em}
 nav.toc ul{margin:.2em 0;padding-left:1.2em} nav.toc>ul{columns:2 22em}
 .limits{background:#fff6e5;border:1px solid #e0a030;border-left:6px solid #e0a030;padding:.3em 1em;margin:1em 0}
@@ -63,6 +63,7 @@ nav.toc ul{margin:.2em 0;padding-left:1.2em} nav.toc>ul{columns:2 22em}
 .st-mismatch{background:#f8d0d0;color:#800} .st-bound{background:#e8d8f8;color:#4b1a80}
 .st-unident{background:#fde2c4;color:#7a3b00} .st-nose{background:#e8e8e8;color:#444}
 .st-rough{background:#e6f2d0;color:#3a5a00} .st-ok{background:#cdeccd;color:#0a5a0a}
+.st-near{background:#fbeec0;color:#6a4a00}
 details{margin:1em 0;border:1px solid #ddd;padding:.3em .8em} summary{cursor:pointer;font-weight:600}
 table.corr td{text-align:center;min-width:3.5em} table.files td{text-align:left}
 table.verdict{font-size:.93em} table.verdict td{vertical-align:top;text-align:right;white-space:nowrap}
@@ -272,10 +273,10 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
             f"||e||<sub>l2</sub> = {fit['error_l2']:.4g} N (relative {100 * fit['error_rel']:.2f} %), "
             f"{fit['nfev']} evaluation{'s' if fit['nfev'] != 1 else ''}, {fit['wall_s']:.1f} s.{status}")
     if errors and errors.get("test") is not None and prepared is not None:
-        bad = errors["test"] > errors["goal"]
+        css, words = judged(errors["test"], errors["goal"], errors["spread"])
         text += (f" Against the measured mean (test <code>{html.escape(prepared.test_id)}</code>): "
-                 f"<span class='{'bad' if bad else ''}'>relative {100 * errors['test']:.1f} %</span> "
-                 f"(goal {100 * errors['goal']:.0f} %, {html.escape(errors['role'])}).")
+                 f"<span class='{css}'>relative {100 * errors['test']:.1f} %</span> "
+                 f"(goal {100 * errors['goal']:.0f} %, {html.escape(errors['role'])}: {words}).")
     text += "</p>" + _table(["", *names], rows)
     text += SE_NOTE.format(dof=fit.get("standard_error_dof", "?")) if shown else ""
     sentence = determination_sentence(fit)
@@ -307,6 +308,19 @@ def fit_block(fit: dict, fit_dir: Path, prepared, paper: dict | None, truth: dic
 def _status_badges(statuses) -> str:
     return " ".join(f"<span class='status {verdict.STATUS_CLASS[st]}'>{html.escape(st)}</span>"
                     for st in statuses)
+
+
+JUDGED_CLASS = {verdict.MET: "", verdict.NEAR: "near", verdict.MISSED: "bad"}
+
+
+def judged(error: float, goal: float, spread: float) -> tuple[str, str]:
+    """(CSS class, words) of an error against its goal (:func:`verdict.judge`): met, at the
+    goal within the run-to-run spread, or missed and by how much."""
+    state = verdict.judge(error, goal, spread)
+    words = {verdict.MET: "met",
+             verdict.NEAR: f"at the goal within the run-to-run spread (\u00b1{verdict.points(spread)})",
+             verdict.MISSED: f"missed by {100 * (error - goal):.1f} points"}[state]
+    return JUDGED_CLASS[state], words
 
 
 def _fitted_cell(row: "verdict.Row | None", value) -> Raw:
@@ -371,9 +385,10 @@ def _rom_rows(fit: dict, errors: dict, paper: dict | None, truth: dict | None, f
     if test is None:
         verdict_cell = "no test"
     else:
-        bad = test > errors["goal"]
+        state = verdict.judge(test, errors["goal"], errors["spread"])
+        badge = {verdict.MISSED: verdict.MISMATCH, verdict.NEAR: verdict.AT_GOAL}.get(state)
         verdict_cell = (f"{100 * test:.1f} % ({100 * errors['goal']:.0f} %, {html.escape(errors['role'])})"
-                        + (" " + _status_badges([verdict.MISMATCH]) if bad else ""))
+                        + (" " + _status_badges([badge]) if badge else ""))
     lines = [(f"fitted to the {html.escape(errors['fitted_to'])}",
               [str(_fitted_cell(flags.get((fit["item"], k)), fit["parameters"][k])) for k in ROM_SYMBOLS],
               [f"{100 * errors['reference']:.1f} %", verdict_cell])]
@@ -530,8 +545,8 @@ def _hifi_run_block(title: str, folder: Path, measured, cfg: dict | None = None,
         goal = goals.get(role, goals.get("prediction"))
         check = ""
         if goal is not None:
-            check = (Raw(f"<span class='bad'>above the goal {100 * goal:.0f} %</span>") if m["error_rel"] > goal
-                     else f"within the goal {100 * goal:.0f} %")
+            css, words = judged(m["error_rel"], goal, verdict.hifi_spread(cfg))
+            check = Raw(f"<span class='{css}'>goal {100 * goal:.0f} %: {html.escape(words)}</span>")
         numbers.append(["relative l2 error vs test", f"{100 * m['error_rel']:.1f} %", check])
     text = f"<h4>{html.escape(title)}</h4>" + _table(["quantity", "value", "check"], numbers) + energy_note
     if report_dir is not None:
@@ -801,20 +816,22 @@ def _fidelity_table(root: Path, cfg: dict, measured: dict | None = None) -> str:
         role = str(summary.get("role", "prediction"))
         goal = goals.get(role, goals["prediction"])
         err = float(m["error_rel"])
-        judged = ("<td>met</td>" if err <= goal else
-                  f"<td class='bad'>missed by {100 * (err - goal):.1f} points</td>")
+        css, words = judged(err, goal, verdict.hifi_spread(cfg))
+        cell = f"<td class='{css}'>{html.escape(words)}</td>" if css else f"<td>{words}</td>"
         ratio = ""
         if measured and case in measured and (path.parent / "curve.csv").exists():
             ratio = f"{100 * verdict.force_ratio(pd.read_csv(path.parent / 'curve.csv'), measured[case]):.0f} %"
         rows.append(f"<tr><td>{html.escape(labelled(case, cfg))}</td><td>{html.escape(role)}</td>"
-                    f"<td>{100 * err:.1f}&nbsp;%</td><td>{100 * goal:.0f}&nbsp;%</td>{judged}<td>{ratio}</td></tr>")
+                    f"<td>{100 * err:.1f}&nbsp;%</td><td>{100 * goal:.0f}&nbsp;%</td>{cell}<td>{ratio}</td></tr>")
     if not rows:
         return ""
     head = "".join(f"<th>{h}</th>" for h in ("case", "role", "relative error", "goal", "verdict",
                                              "model force / measured"))
     return ("<h3>Virtual tests against the bending tests</h3><p class='note'>Relative l2 error of "
             "each virtual test's force against the measured mean over its window; the goal is "
-            "the project's (calibration cases fitted on, the others predicted with no refit); the "
+            "the project's (calibration cases fitted on, the others predicted with no refit); an error "
+            "within the run-to-run spread of its goal (hifi.pipeline.fidelity_spread: explicit runs "
+            "differ in their last bits between machines) is at the goal, neither met nor missed; the "
             "last column sums the model's force over the measured grid against the test's.</p>"
             f"<div class='wide'><table><tr>{head}</tr>{''.join(rows)}</table></div>")
 
@@ -926,7 +943,10 @@ def folder_name(rel: str, cfg: dict) -> str:
 SECTION_ORDER = ("tensile", "hifi", "rom", "branch")   # the chain's order (DESIGN sec. 2)
 STATUS_MEANING = {
     verdict.MISMATCH: "relative l2 error against the measured mean above the goal of its role "
-                      "(hifi.pipeline.fidelity_goal)",
+                      "(hifi.pipeline.fidelity_goal) by more than its run-to-run spread",
+    verdict.AT_GOAL: "a hi-fi run's relative l2 error within its run-to-run spread of the goal "
+                     "(hifi.pipeline.fidelity_spread): another machine's last bits could put it on "
+                     "either side",
     verdict.ON_BOUND: f"within {100 * verdict.BOUND_TOL:.0f} % of an end of its search interval",
     verdict.NOT_IDENTIFIABLE: f"standard error above {100 * verdict.UNDETERMINED:.0f} %, or stopped by the "
                               "fit's identifiability screen",
@@ -962,7 +982,7 @@ def verdict_section(rows: list, cfg: dict) -> str:
         goals = sorted({r.goal for r in sr if r.goal is not None})
         err = "" if not errs else (f"{100 * min(errs):.1f}-{100 * max(errs):.1f} %" if max(errs) > min(errs)
                                    else f"{100 * errs[0]:.1f} %")
-        bad = bool(errs) and any(r.error > r.goal for r in sr if r.error is not None and r.goal is not None)
+        bad = any(verdict.MISMATCH in r.statuses for r in sr)
         body.append(f"<tr><td><a href='#{stage}'>{html.escape(verdict.STAGE_NAMES[stage])}</a></td>"
                     f"<td>{len(sr)} in {len(items)} item{'s' if len(items) > 1 else ''}</td>"
                     f"<td class='{'bad' if bad else ''}'>{err}</td>"
