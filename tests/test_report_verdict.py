@@ -18,7 +18,7 @@ from harnesspipe.report import html as report_html
 from harnesspipe.report import plots, verdict
 from harnesspipe.report.names import physical_name, solver_statistics
 
-U = np.linspace(0.0, 30.0, 61)
+U = np.linspace(0.0, 30.0, 121)
 F_TEST = 2.0 * U          # the measured three-point mean
 F_HIFI = 1.0 * U          # a hi-fi model reaching half of it: relative error 50 %
 
@@ -174,6 +174,20 @@ def test_a_virtual_test_at_its_goal_is_said_so(tree):
             "tube (10.5 % against 10 %).") in limits
     hifi = page[page.index("id='hifi'"):page.index("id='rom'")]
     assert "goal 10 %: at the goal within the run-to-run spread (\u00b11 point)" in html.unescape(hifi)
+
+
+def test_a_virtual_tests_E_is_also_read_over_its_tests_linear_part(tree):
+    measured = report_html._measured_by_case(tree["prepared"])
+    window = verdict.test_window_moduli("cwb19_t2_closed", tree["res"], measured, tree["cfg"])
+    I = np.pi * 7.05**4 / 4.0                       # r_o of the closed CWB (config cases)
+    assert window["u_lin"] == pytest.approx(30.0)   # the test is linear to its end
+    assert window["E_test"] == pytest.approx(2.0 * 127.0**3 / (48.0 * I))    # eq. 13, slope 2 N/mm
+    assert window["E_hifi"] == pytest.approx(0.5 * window["E_test"])        # the virtual test's 1 N/mm
+    assert verdict.test_window_moduli("cwb19_t2_fabric", tree["res"], measured, tree["cfg"]) is None
+    _, page = _build(tree)
+    rom = page[page.index("id='rom'"):page.index("id='branch'")]
+    assert (f"E over the test&#x27;s linear part (0-30.0 mm): virtual / test</td>"
+            f"<td>{window['E_hifi']:.3g} / {window['E_test']:.3g}</td>") in rom
 
 
 def test_report_leads_with_the_verdict_and_generated_limitations(tree):

@@ -374,7 +374,12 @@ ROM_NOTE = ("<p class='note'>Each ROM is fitted to the curve in its first row (c
             "<code>rom.reference</code>); its relative l2 error is given against that curve and "
             "against the measured mean of the case's test, beside the goal of the case's role "
             "(<code>hifi.pipeline.fidelity_goal</code>). A ROM fitted to one deterministic hi-fi "
-            "curve has no standard error (no noise to propagate).</p>")
+            "curve has no standard error (no noise to propagate). Its E is eq. 13 on the linear part "
+            "of that curve; a virtual test's first millimetres are often not linear where the test's "
+            "are (a toe while the bundle takes up its clearance, or a stiff start while the tape "
+            "sticks), so its linear part is shorter. The row 'E over the test's linear part' reads eq. "
+            "13 on the virtual test over the millimetres the test's E was read on: the same data "
+            "reduction on both curves.</p>")
 ROM_SYMBOLS = ("E", "sigma_y", "K", "n")
 
 
@@ -392,6 +397,10 @@ def _rom_rows(fit: dict, errors: dict, paper: dict | None, truth: dict | None, f
     lines = [(f"fitted to the {html.escape(errors['fitted_to'])}",
               [str(_fitted_cell(flags.get((fit["item"], k)), fit["parameters"][k])) for k in ROM_SYMBOLS],
               [f"{100 * errors['reference']:.1f} %", verdict_cell])]
+    window = errors.get("test_window")
+    if window:
+        lines.append((html.escape(f"E over the test's linear part (0-{window['u_lin']:.1f} mm): virtual / test"),
+                      [f"{window['E_hifi']:.3g} / {window['E_test']:.3g}", "", "", ""], ["", ""]))
     if paper:
         lines.append(("paper (Table 3)", [f"{paper[k]:g}" if k in paper else "" for k in ROM_SYMBOLS], ["", ""]))
     if truth:

@@ -32,10 +32,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from harnesspipe.calibrate import eq13
 from harnesspipe.calibrate.hardening import N_MAX
 from harnesspipe.calibrate.objective import relative_l2_error
 from harnesspipe.report.names import physical_name
 from harnesspipe.stages.chain_settings import STEPS as CHAIN_STEPS
+from harnesspipe.stages.chain_settings import cases as chain_cases
 from harnesspipe.stages.common import read_fit
 
 DETERMINED, UNDETERMINED = 0.05, 0.3   # relative standard error: "determined" below, "not" above
@@ -218,8 +220,9 @@ def tensile_rows(paths, cfg: dict, truth: dict) -> list[Row]:
 def rom_errors(fit: dict, fit_dir: Path, results: Path, measured: dict, cfg: dict) -> dict:
     """A ROM fit's relative l2 errors: ``reference`` (the curve it was fitted to: fit.json),
     ``test`` (its curve against the case's measured mean; None without a test), the
-    ``goal`` of the case's role (its virtual test's role; prediction without one) and the
-    test error's ``spread`` (a hi-fi run's, when the ROM is fitted to one; else 0)."""
+    ``goal`` of the case's role (its virtual test's role; prediction without one), the
+    test error's ``spread`` (a hi-fi run's, when the ROM is fitted to one; else 0) and, for
+    a ROM fitted to a virtual test, ``test_window`` (:func:`test_window_moduli`)."""
     case = fit["item"]
     summary = results / "hifi" / "virtual" / case / "summary.json"
     role = "prediction"
@@ -231,7 +234,27 @@ def rom_errors(fit: dict, fit_dir: Path, results: Path, measured: dict, cfg: dic
     hifi = fit["test_id"].startswith("hifi:")
     return {"reference": float(fit["error_rel"]), "test": test, "goal": _goal(cfg, role), "role": role,
             "spread": hifi_spread(cfg) if hifi else 0.0,
+            "test_window": test_window_moduli(case, results, measured, cfg) if hifi else None,
             "fitted_to": "hi-fi virtual test" if fit["test_id"].startswith("hifi:") else f"test {fit['test_id']}"}
+
+
+def test_window_moduli(case: str, results: Path, measured: dict, cfg: dict) -> dict | None:
+    """eq. 13 read the same way on the virtual test and on its test: E over the test's own
+    linear part 0 < u <= u_lin (u_lin of the measured mean, :func:`eq13.linear_part`), of the
+    hi-fi curve (``E_hifi``) and of the measured mean (``E_test``).  The ROM's E reads each
+    curve's own linear part; where a virtual test is not linear over the millimetres the
+    test is, the two differ, and this says whether its stiffness over the test's linear part
+    agrees.  None without a virtual test or a test of the case."""
+    curve = Path(results) / "hifi" / "virtual" / case / "curve.csv"
+    if case not in measured or not curve.exists():
+        return None
+    span, r_o = float(cfg["three_point"]["span"]), float(chain_cases(cfg)[case]["r_o"])
+    test = measured[case]
+    slope, u_lin = eq13.linear_part(test.grid, test.mean, span)
+    hifi = pd.read_csv(curve)
+    slope_hifi = eq13.slope_up_to(hifi["deflection_mm"], hifi["force_N"], u_lin)
+    return {"u_lin": u_lin, "E_hifi": eq13.modulus_from_slope(slope_hifi, span, r_o),
+            "E_test": eq13.modulus_from_slope(slope, span, r_o)}
 
 
 def rom_rows(paths, cfg: dict, truth: dict, results: Path, measured: dict) -> list[Row]:
