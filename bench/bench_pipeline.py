@@ -7,7 +7,10 @@ reads every job's start and end from Snakemake's log.  The Numba cache is the us
 ``HARNESSPIPE_NUMBA_CACHE`` to an empty folder for a cold compile; the source files are in a
 new place either way, so Numba's index compiles them afresh).  Writes the total, the time
 per rule and the hi-fi runs per stage under "## Pipeline (<profile>)" in bench/RESULTS.md (keeping the section's notes
-by hand, "### By hand").
+by hand, "### By hand"), and the issue's goals measured on this run (:func:`goals`): each
+virtual test's relative l2 error against its goal (met, at the goal within the run-to-run
+spread, or missed), Table 3's E from the virtual tests against the paper's, and the wall
+time against the profile's.
 """
 from __future__ import annotations
 
@@ -30,6 +33,8 @@ from benchlib import section_tail, write_section
 REPO = Path(__file__).resolve().parents[1]
 IGNORE = shutil.ignore_patterns("results", ".snakemake", ".venv", ".cache", "__pycache__", "*.egg-info",
                                 "artifacts", ".git", ".pytest_cache")
+TABLE3_TOLERANCE = 0.15                      # issue 27: Table 3's E within 15 % of the paper's
+WALL_GOAL_MIN = {"quick": 10.0, "default": 45.0}   # issue 27: the pipeline's wall time
 STAMP = re.compile(r"^\[(\w{3} \w{3} +\d+ \d\d:\d\d:\d\d \d{4})\]$")
 
 
@@ -80,6 +85,49 @@ def hifi_runs(results: Path) -> list[str]:
     return lines
 
 
+def goals(results: Path, profile: str, wall_min: float) -> list[str]:
+    """The issue's goals measured on a finished run's results, as Markdown lines: the virtual
+    tests' errors (the report's verdict, :func:`harnesspipe.report.verdict.hifi_fidelity`),
+    Table 3's E (the ROM's, and eq. 13 over the test's linear part,
+    :func:`harnesspipe.report.verdict.test_window_moduli`) and the wall time."""
+    import pandas as pd
+
+    from harnesspipe import config
+    from harnesspipe.report import verdict
+    from harnesspipe.report.html import _measured_by_case
+    cfg = config.load(results / "config.yaml")
+    measured = _measured_by_case(sorted((results / "data").glob("bend_*.h5")))
+    lines = ["Goals (issue 27) on this run:", "",
+             "| virtual test | role | relative l2 error | goal | verdict |", "|---|---|---|---|---|"]
+    spread = verdict.hifi_spread(cfg)
+    for f in verdict.hifi_fidelity(results, cfg, measured):
+        judged = f["verdict"] + (f" by {verdict.points(f['error'] - f['goal'])}" if f["verdict"] == verdict.MISSED
+                                 else f" (within {verdict.points(spread)})" if f["verdict"] == verdict.NEAR else "")
+        lines.append(f"| {f['case']} | {f['role']} | {100 * f['error']:.1f} % | {100 * f['goal']:.0f} % | {judged} |")
+    paper = cfg["paper"]["table3"]
+    table3 = pd.read_csv(results / "rom" / "table3.csv").set_index("case")
+    rows, within = [], 0
+    for case in sorted(set(paper) & set(table3.index)):
+        E, E_paper = float(table3.loc[case, "E"]), float(paper[case]["E"])
+        window = verdict.test_window_moduli(case, results, measured, cfg)
+        ok = abs(E / E_paper - 1.0) <= TABLE3_TOLERANCE
+        within += ok
+        rows.append(f"| {case} | {E:.1f} | {E_paper:g} | {100 * (E / E_paper - 1.0):+.0f} % | "
+                    f"{'yes' if ok else 'no'} | "
+                    + (f"{window['E_hifi']:.1f} / {window['E_test']:.1f} (0-{window['u_lin']:.1f} mm)" if window else "")
+                    + " |")
+    lines += ["", f"Table 3's E from the virtual tests (the ROM stage's, rom.reference "
+              f"{cfg['rom']['reference']}): {within} of {len(rows)} within {100 * TABLE3_TOLERANCE:.0f} % "
+              "of the paper's; beside it eq. 13 over the test's linear part, virtual test / test:", "",
+              "| case | E [MPa] | paper | difference | within | over the test's linear part |",
+              "|---|---|---|---|---|---|", *rows]
+    goal = WALL_GOAL_MIN.get(profile)
+    if goal is not None:
+        lines += ["", f"Wall time {wall_min:.1f} min against the goal of {goal:g} min: "
+                  + ("met." if wall_min <= goal else f"missed by {wall_min - goal:.1f} min.")]
+    return lines
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--profile", default="quick")
@@ -122,6 +170,8 @@ def main() -> None:
         + "; ".join(f"{r} {n} / {s / 60:.1f} min" for r, (n, s) in sorted(per_rule.items(), key=lambda kv: -kv[1][1])
                     if s >= 1.0),
         *hifi_runs(project / "results"),
+        "",
+        *goals(project / "results", args.profile, wall / 60),
         "",
         "Jobs of 20 s or more (minutes from the first job's start):",
         "",
