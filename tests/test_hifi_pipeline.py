@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -504,6 +505,40 @@ def test_run_case_writes_artefacts_and_error(tmp_path, fake):
     assert s["measured"]["error_rel"] < 1e-3          # interpolation only
     assert list(pd.read_csv(tmp_path / "v" / "curve.csv").columns) == ["deflection_mm", "force_N"]
     assert (tmp_path / "v" / "energies.csv").exists()
+
+
+def test_a_step_takes_the_run_an_earlier_step_made_at_its_start(tmp_path, fake):
+    """A step starts where the previous one rested (its start values are the priors' picks):
+    that run, the same run_key, is taken from the earlier step's folder, not run again; with
+    any difference (here a --set key) it runs."""
+    u = np.linspace(0.0, 30.0, 101)
+    refs = {"cwb19_t2_closed": write_prepared(tmp_path / "closed.h5", "cwb19_t2_closed",
+                                              fake.force(u, fake.TRUTH, "closed_tube"), u)}
+    base = {"cases": ["cwb19_t2_closed"], "window": [0.0, 30.0], "method": "bounded", "xatol": 1e-3,
+            "fatol": None, "maxfev": 12, "models": {"cwb19_t2_closed": MODEL}, "set": {},
+            "start": {"mu_rtb": 0.2, "mu_rtp": 0.2, "delta0": 0.05, "delta_f": 0.1, "alpha_d": 1.0}}
+    first = hifi_chain.fit_step("mu_rtb", {**base, "names": ["mu_rtb"], "bounds": [0.0, 0.35]}, refs,
+                                tmp_path / "a", runner=runner_of(fake))
+    calls = []
+    counting = lambda *a: calls.append(a) or runner_of(fake)(*a)  # noqa: E731
+    prior = [tmp_path / "a" / "fit.json"]
+    second = hifi_chain.fit_step("mu_rtp", {**base, "names": ["mu_rtp"], "bounds": [0.0, 0.6]}, refs,
+                                 tmp_path / "b", priors=prior, runner=counting)
+    assert second["hifi_runs_reused"] == 1 and len(calls) == second["nfev"] - 1
+    with h5py.File(tmp_path / "b" / "trace.h5") as f:    # its first evaluation: the earlier pick's run,
+        assert f["x"][0, 0] == 0.2                         # its curve as written (8 digits)
+        assert f["error"][0] == pytest.approx(first["error_l2"], rel=1e-7)
+    alone = tmp_path / "alone" / "fit.json"      # the same prior without its runs: all run anew
+    alone.parent.mkdir()
+    shutil.copyfile(prior[0], alone)
+    fresh = hifi_chain.fit_step("mu_rtp", {**base, "names": ["mu_rtp"], "bounds": [0.0, 0.6]}, refs,
+                                tmp_path / "b2", priors=[alone], runner=runner_of(fake))
+    assert fresh["hifi_runs_reused"] == 0
+    assert second["parameters"]["mu_rtp"] == pytest.approx(fresh["parameters"]["mu_rtp"], rel=1e-6)
+    calls.clear()
+    third = hifi_chain.fit_step("mu_rtp", {**base, "names": ["mu_rtp"], "bounds": [0.0, 0.6], "set": {"x": 1}},
+                                refs, tmp_path / "c", priors=prior, runner=counting)
+    assert third["hifi_runs_reused"] == 0 and len(calls) == third["nfev"]
 
 
 def test_virtual_test_reuses_the_fits_run_only_when_it_is_the_same_run(tmp_path, fake):

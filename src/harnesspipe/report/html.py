@@ -752,7 +752,7 @@ def _calibration_step(path: Path, paper: dict, ctx: _HifiContext) -> str:
     text = _step_text(fit, paper, ctx.cfg)
     figs, note = _step_figures(path.parent, fit, ctx)
     rej = _step_rejections(path.parent, fit)
-    n = int(fit.get("hifi_runs", fit["nfev"]))
+    n = int(fit.get("hifi_runs", fit["nfev"])) - int(fit.get("hifi_runs_reused", 0))   # reused: no cost
     wall = float(fit.get("hifi_wall_s", 0.0))
     ctx.cost.add(f"fit {fit['item']}", n, wall, wall / max(n, 1))
     files = links.folder_links(path.parent, ctx.report_dir) if ctx.report_dir is not None else ""

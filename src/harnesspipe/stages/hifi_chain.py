@@ -11,7 +11,10 @@
   ``trace.h5`` (every evaluation), ``rejected.jsonl`` (failed runs, parameters and
   reason), ``fit.png`` and per case ``<case>/summary.json`` and ``energies.csv``.
   The live evaluation log is ``replay/evaluations.h5`` -- not a Snakemake output, so
-  it survives an interrupted or failed job and the rerun replays it.
+  it survives an interrupted or failed job and the rerun replays it.  A run an earlier
+  step of the chain already made (the same ``run_key``: typically a step's start, which is
+  the previous step's pick) is taken from that step's folder, not run again
+  (:class:`StoredRun`).
 * :func:`rom_crosscheck` -- eq. 13 + simplex (exactly the ROM stage's
   :func:`harnesspipe.calibrate.rom.fit`) on a hi-fi curve instead of a measured mean.
 * :func:`interface_table` -- ``results/hifi/interface.csv`` (``parameter,value``).
@@ -34,6 +37,7 @@ import shutil
 import threading
 import time
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -147,6 +151,26 @@ def run_case(case: str, settings: dict, outdir: Path, *, table2: Path | None = N
     return summary
 
 
+#: summary keys that describe where a run was used, not the run (a reused run gets its own)
+RUN_ENVELOPE = ("case", "role", "interface", "set", "run_key", "measured", "reused_from",
+                "interface_source", "coverings_source")
+
+
+@dataclass
+class StoredRun:
+    """A finished run read back from the folder :func:`write_run` wrote: its curve and its
+    own summary (``reused_from`` the folder); the rest of its artefacts stay there and are
+    copied where the run is kept (:func:`_copy_run`)."""
+    folder: Path
+    curve: pd.DataFrame
+    summary: dict
+
+    @classmethod
+    def load(cls, folder: Path, earlier: dict) -> "StoredRun":
+        own = {k: v for k, v in earlier.items() if k not in RUN_ENVELOPE}
+        return cls(Path(folder), pd.read_csv(Path(folder) / "curve.csv"), {**own, "reused_from": str(folder)})
+
+
 def _reusable(folder: Path | None, key: str) -> dict | None:
     """The summary of the run in ``folder`` if it is the run ``key`` and complete, else None."""
     if folder is None or not (Path(folder) / "summary.json").exists():
@@ -225,7 +249,8 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                         {"step": step, "settings": settings, "fixed": fixed, "coverings": coverings_text})
 
     runs: dict = {}
-    simulate = CaseRun(settings, table2, runner)
+    simulate = CaseRun(settings, table2, runner,
+                       earlier={c: [Path(p).parent / c for p in priors] for c in cases})
     rejected_live = live / "rejected.jsonl"
     _live_rejected(rejected_live, key)
     with _case_pool(min(workers, len(cases))) as pool:
@@ -252,10 +277,13 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                                refs[case].mean, window)
         per_case[case] = {"test_id": refs[case].test_id, "error_l2_window": err,
                           "measured": curve_vs_measured(run.curve, refs[case])}
-        write_run(run, outdir / case, {"case": case, "role": f"calibration ({step})", **run.summary,
-                                       "interface": {**NEUTRAL, **best}, "set": settings.get("set", {}),
-                                       "run_key": run_key(settings["models"][case], best,
-                                                          settings.get("set", {}), table2)})
+        summary = {"case": case, "role": f"calibration ({step})", **run.summary,
+                   "interface": {**NEUTRAL, **best}, "set": settings.get("set", {}),
+                   "run_key": run_key(settings["models"][case], best, settings.get("set", {}), table2)}
+        if isinstance(run, StoredRun):
+            _copy_run(run.folder, outdir / case, summary)
+        else:
+            write_run(run, outdir / case, summary)
         c = run.curve.rename(columns={"deflection_mm": "displacement_mm"})[["displacement_mm", "force_N"]]
         curves.append(c.assign(case=case)[["case", "displacement_mm", "force_N"]])
     curve = pd.concat(curves, ignore_index=True)
@@ -263,6 +291,7 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
     _copy_atomic(rejected_live, outdir / "rejected.jsonl")
     norm = sum(float(np.linalg.norm(F[hcal.window_mask(u, w)])) for _, u, F, w in targets)
     trace = res.trace
+    reused = sum(isinstance(r, StoredRun) for r in runs.values())
     path = write_fit(
         outdir, stage="hifi", item=step, test_id=",".join(refs[c].test_id for c in cases),
         parameters={k: best[k] for k in names}, error_l2=res.fun, error_rel=res.fun / max(norm, 1e-300),
@@ -271,7 +300,8 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                "bounds": settings.get("bounds"), "interface": {**NEUTRAL, **best}, "priors": prior_ids,
                "per_case": per_case, "message": res.message,
                "hifi_runs": int(len(trace) * len(cases) + reruns),   # upper bound: a rejection stops early
-               "hifi_runs_this_process": int(objective.n_runs + reruns),
+               "hifi_runs_this_process": int(objective.n_runs + reruns - reused),
+               "hifi_runs_reused": int(reused),
                "hifi_wall_s": float(np.nansum(trace["wall_s"])) if len(trace) else 0.0,
                "rejected": len(hcal.read_rejected(rejected_live, key)),
                "set": settings.get("set", {})})
@@ -283,14 +313,24 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
 
 class CaseRun:
     """``simulate(case, params) -> (u, F, run)`` of a fit: picklable, so that a process
-    pool can run the cases of one evaluation side by side."""
+    pool can run the cases of one evaluation side by side.  ``earlier``: per case, folders
+    of earlier steps' runs; a run with the same ``run_key`` there is taken
+    (:class:`StoredRun`) instead of running again."""
 
-    def __init__(self, settings: dict, table2: Path | None, runner=None):
+    def __init__(self, settings: dict, table2: Path | None, runner=None, earlier: dict | None = None):
         self.settings, self.table2, self.runner = settings, table2, runner
+        self.earlier = earlier or {}
 
     def __call__(self, case: str, params: dict):
-        run = _run({**self.settings, "model": self.settings["models"][case]}, case, params,
-                   self.table2, self.runner)
+        model = self.settings["models"][case]
+        key = run_key(model, params, self.settings.get("set", {}), self.table2)
+        for folder in self.earlier.get(case, ()):
+            earlier = _reusable(folder, key)
+            if earlier is not None:
+                run = StoredRun.load(folder, earlier)
+                break
+        else:
+            run = _run({**self.settings, "model": model}, case, params, self.table2, self.runner)
         return run.curve["deflection_mm"].to_numpy(float), run.curve["force_N"].to_numpy(float), run
 
 
