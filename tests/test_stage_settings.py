@@ -61,6 +61,8 @@ def test_chain_starts_with_the_build_state_and_carries_it():
     assert t["start"]["tape_tension"] == cfg["hifi"]["build"]["tape_tension"]
     assert t["bounds"] == cfg["hifi"]["pipeline"]["tension_bounds"] and t["cases"] == s["cases"]
     assert t["window"] == s["window"]
+    # the same inputs named in both (the tension step's start is the build step's pick: one run)
+    assert set(t["start"]) == set(s["start"]) and s["start"]["tape_tension"] == t["start"]["tape_tension"]
     assert list(chain.STEPS)[:2] == ["build", "tension"] and chain.STEPS["tension"]["prior"] == ["build"]
     assert all({"build", "tension"} <= set(step["prior"]) for name, step in chain.STEPS.items()
                if name not in ("build", "tension"))

@@ -187,7 +187,9 @@ def fit_settings(config: dict, step: str) -> str:
     bounded = s["method"] == "bounded"
     fabric = any(is_fabric(config, c) for c in s["cases"])
     start = {k: v for k, v in config["hifi"]["parameters"].items() if k != "E2_over_E1" or fabric}
-    start.update({k: build_start(config, k) for k in BUILD if k in s["names"]})
+    # every build input a run of these cases reads, at its start value: a run's identity then
+    # does not depend on which step made it (the next step takes its start's run, hifi_chain.StoredRun)
+    start.update({k: build_start(config, k) for k in BUILD if k != "fabric_end_tape_layers" or fabric})
     window = pipe[s["window"]]
     return json.dumps({
         "names": s["names"], "cases": s["cases"], "window": window, "method": s["method"],
