@@ -94,16 +94,14 @@ def goals(results: Path, profile: str, wall_min: float) -> list[str]:
 
     from harnesspipe import config
     from harnesspipe.report import verdict
-    from harnesspipe.report.html import _measured_by_case
+    from harnesspipe.report.html import _measured_by_case, judged
     cfg = config.load(results / "config.yaml")
     measured = _measured_by_case(sorted((results / "data").glob("bend_*.h5")))
     lines = ["Goals (issue 27) on this run:", "",
              "| virtual test | role | relative l2 error | goal | verdict |", "|---|---|---|---|---|"]
-    spread = verdict.hifi_spread(cfg)
     for f in verdict.hifi_fidelity(results, cfg, measured):
-        judged = f["verdict"] + (f" by {verdict.points(f['error'] - f['goal'])}" if f["verdict"] == verdict.MISSED
-                                 else f" (within {verdict.points(spread)})" if f["verdict"] == verdict.NEAR else "")
-        lines.append(f"| {f['case']} | {f['role']} | {100 * f['error']:.1f} % | {100 * f['goal']:.0f} % | {judged} |")
+        words = judged(f["error"], f["goal"], verdict.hifi_spread(cfg))[1]   # the report's words
+        lines.append(f"| {f['case']} | {f['role']} | {100 * f['error']:.1f} % | {100 * f['goal']:.0f} % | {words} |")
     paper = cfg["paper"]["table3"]
     table3 = pd.read_csv(results / "rom" / "table3.csv").set_index("case")
     rows, within = [], 0

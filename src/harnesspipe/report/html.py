@@ -390,8 +390,7 @@ def _rom_rows(fit: dict, errors: dict, paper: dict | None, truth: dict | None, f
     if test is None:
         verdict_cell = "no test"
     else:
-        state = verdict.judge(test, errors["goal"], errors["spread"])
-        badge = {verdict.MISSED: verdict.MISMATCH, verdict.NEAR: verdict.AT_GOAL}.get(state)
+        badge = verdict.JUDGED_STATUS.get(verdict.judge(test, errors["goal"], errors["spread"]))
         verdict_cell = (f"{100 * test:.1f} % ({100 * errors['goal']:.0f} %, {html.escape(errors['role'])})"
                         + (" " + _status_badges([badge]) if badge else ""))
     lines = [(f"fitted to the {html.escape(errors['fitted_to'])}",

@@ -110,12 +110,13 @@ def judge(error: float, goal: float, spread: float = 0.0) -> str:
     return MET if error <= goal - spread else NEAR
 
 
+JUDGED_STATUS = {MISSED: MISMATCH, NEAR: AT_GOAL}   # the status a judged error gives (MET: none)
+
+
 def statuses(*, se, on_bound, error, goal, spread: float = 0.0, screened: bool = False) -> list[str]:
     """The statuses of a parameter (see module docstring), most severe first."""
-    out = []
     judged = MET if error is None or goal is None else judge(error, goal, spread)
-    if judged != MET:
-        out.append(MISMATCH if judged == MISSED else AT_GOAL)
+    out = [JUDGED_STATUS[judged]] if judged in JUDGED_STATUS else []
     if on_bound:
         out.append(ON_BOUND)
     if screened or (se is not None and se > UNDETERMINED):
