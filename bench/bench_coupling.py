@@ -66,7 +66,7 @@ def table(cfg: dict, results: Path | None) -> list[str]:
         F_test = measured_mean(case, u)
         if F_test is None or c["covering"] == "none":
             continue
-        F_free = free_wire_force(cfg, case, u, cfg["profiles"]["default"]["rom"])
+        F_free = free_wire_force(cfg, c["wires"], u, cfg["profiles"]["default"]["rom"])
         wires = ", ".join(f"{n} {t.replace('wire_', '')}" for t, n in c["wires"].items())
         rows.append(f"| {case} | wires alone ({wires}) | " + " | ".join(f"{f:.2f}" for f in F_free) + " |")
         rows.append(f"| | test (mean) | {_cells(F_test, F_free)} |")

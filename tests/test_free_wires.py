@@ -20,7 +20,7 @@ def test_elastic_slope_is_the_sum_of_the_wires_48_E_I_over_L_cubed(cfg):
     k = sum(n * 48.0 * cfg["materials"][t]["E"] * math.pi * (0.5 * cfg["materials"][t]["d_outer"])**4
             / 4.0 / L**3 for t, n in cfg["cases"][case]["wires"].items())
     u = np.array([0.2, 0.5])
-    assert free_wire_force(cfg, case, u) / u == pytest.approx([k, k], rel=1e-3)
+    assert free_wire_force(cfg, cfg["cases"][case]["wires"], u) / u == pytest.approx([k, k], rel=1e-3)
 
 
 def test_a_perfectly_plastic_wire_reaches_the_limit_load_4_Mp_over_L(cfg):

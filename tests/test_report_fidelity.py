@@ -34,3 +34,22 @@ def test_each_virtual_test_is_met_at_or_missed_by_its_roles_goal(tmp_path):
     assert "<td class='bad'>missed by 4.0 points</td>" in rows[2]
     assert "<td class='near'>at the goal within the run-to-run spread (\u00b11 point)</td>" in rows[3]
     assert _fidelity_table(tmp_path / "nothing", cfg) == ""
+
+
+def test_the_table_gives_the_wires_own_force_each_curve_carries(tmp_path):
+    """A virtual test at twice its wires' own force and a test at once it: '2.00x / 1.00x'."""
+    import numpy as np
+    import pandas as pd
+
+    from harnesspipe.models.free_wires import free_wire_force
+    from harnesspipe.stages.data import Prepared
+    cfg = config.load()
+    case = "cwb10t1_9t2_fabric"
+    u = np.linspace(0.0, 30.0, 31)
+    F_free = free_wire_force(cfg, cfg["cases"][case]["wires"], u)
+    _virtual(tmp_path, case, "validation", 0.40)
+    pd.DataFrame({"deflection_mm": u, "force_N": 2.0 * F_free}).to_csv(
+        tmp_path / "virtual" / case / "curve.csv", index=False)
+    measured = {case: Prepared(case, {}, u, F_free, F_free, F_free, {})}
+    row = _fidelity_table(tmp_path, cfg, measured).split("<tr>")[2]
+    assert "<td>200 %</td><td>2.00x / 1.00x</td></tr>" in row

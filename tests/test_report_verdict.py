@@ -14,6 +14,7 @@ import pandas as pd
 import pytest
 
 from harnesspipe import config as cfgmod
+from harnesspipe.models.free_wires import free_wire_force
 from harnesspipe.report import html as report_html
 from harnesspipe.report import plots, verdict
 from harnesspipe.report.names import physical_name, solver_statistics
@@ -198,6 +199,9 @@ def test_report_leads_with_the_verdict_and_generated_limitations(tree):
     limits = page[page.index("id='limitations'"):page.index("id='parameters'")]
     assert ("The hi-fi model does not match the bending tests: 1 of 1 virtual tests miss their goal, with "
             "relative errors of 50 %; their force is 50 % of the measured force") in limits
+    F_free = free_wire_force(tree["cfg"], tree["cfg"]["cases"]["cwb19_t2_closed"]["wires"], [30.0])[0]
+    assert (f"virtual test / test: 19 x type 2, closed tube {30.0 / F_free:.2f}x / {60.0 / F_free:.2f}x. "
+            "Where the two differ, what misses is what holds the wires together") in limits   # F = u, 2u
     assert ("they reproduce the hi-fi curves to 6 % but the measured means only to 47 %") in limits
     assert ("4 parameters sit on a bound of their search, so the value reflects the bound, not the data: "
             "sigma_Y of closed tube (ridged polypropylene); mu_rtb (hi-fi interface); K and n of 19 x type 2, "

@@ -32,12 +32,11 @@ def wire_force(material: dict, three_point: dict, mesh: dict, u) -> np.ndarray:
     return np.interp(u, curve["deflection_mm"].to_numpy(), curve["force_N"].to_numpy())
 
 
-def free_wire_force(config: dict, case: str, u, mesh: dict | None = None) -> np.ndarray:
-    """F_free(u) of ``case``'s wires (config cases.<case>.wires) at the run's ROM mesh
-    (``profiles[profile].rom``) unless ``mesh`` is given."""
+def free_wire_force(config: dict, wires: dict, u, mesh: dict | None = None) -> np.ndarray:
+    """F_free(u) of the bundle ``wires`` ({wire_typeN: count}, a case's ``wires``) at the
+    run's ROM mesh (``profiles[profile].rom``) unless ``mesh`` is given."""
     if mesh is None:
         mesh = config["profiles"][config["profile"]]["rom"]
-    wires = config["cases"][case]["wires"]
     return sum(count * wire_force(config["materials"][name], config["three_point"], mesh, u)
                for name, count in wires.items())
 

@@ -826,21 +826,29 @@ def _fidelity_table(root: Path, cfg: dict, measured: dict | None = None) -> str:
         err = float(m["error_rel"])
         css, words = judged(err, goal, verdict.hifi_spread(cfg))
         cell = f"<td class='{css}'>{html.escape(words)}</td>" if css else f"<td>{words}</td>"
-        ratio = ""
+        ratio = carried = ""
         if measured and case in measured and (path.parent / "curve.csv").exists():
-            ratio = f"{100 * verdict.force_ratio(pd.read_csv(path.parent / 'curve.csv'), measured[case]):.0f} %"
+            curve = pd.read_csv(path.parent / "curve.csv")
+            ratio = f"{100 * verdict.force_ratio(curve, measured[case]):.0f} %"
+            carried = "{:.2f}x / {:.2f}x".format(*verdict.couplings(curve, measured[case], cfg, case))
         rows.append(f"<tr><td>{html.escape(labelled(case, cfg))}</td><td>{html.escape(role)}</td>"
-                    f"<td>{100 * err:.1f}&nbsp;%</td><td>{100 * goal:.0f}&nbsp;%</td>{cell}<td>{ratio}</td></tr>")
+                    f"<td>{100 * err:.1f}&nbsp;%</td><td>{100 * goal:.0f}&nbsp;%</td>{cell}<td>{ratio}</td>"
+                    f"<td>{carried}</td></tr>")
     if not rows:
         return ""
     head = "".join(f"<th>{h}</th>" for h in ("case", "role", "relative error", "goal", "verdict",
-                                             "model force / measured"))
+                                             "model force / measured",
+                                             "wires' own force carried at the end: model / test"))
     return ("<h3>Virtual tests against the bending tests</h3><p class='note'>Relative l2 error of "
             "each virtual test's force against the measured mean over its window; the goal is "
             "the project's (calibration cases fitted on, the others predicted with no refit); an error "
             "within the run-to-run spread of its goal (hifi.pipeline.fidelity_spread: explicit runs "
             "differ in their last bits between machines) is at the goal, neither met nor missed; the "
-            "last column sums the model's force over the measured grid against the test's.</p>"
+            "column 'model force / measured' sums the model's force over the measured grid against the "
+            "test's; the last gives how many times its wires' own force (each wire bending on its own, "
+            "Table 1: the bundle with nothing holding it together) each curve carries at the test's end, "
+            "what the covering, the tape and the friction add: where model and test differ there, the "
+            "miss is in what holds the wires together, not in the wires.</p>"
             f"<div class='wide'><table><tr>{head}</tr>{''.join(rows)}</table></div>")
 
 

@@ -35,6 +35,7 @@ import pandas as pd
 from harnesspipe.calibrate import eq13
 from harnesspipe.calibrate.hardening import N_MAX
 from harnesspipe.calibrate.objective import relative_l2_error
+from harnesspipe.models.free_wires import coupling, free_wire_force
 from harnesspipe.report.names import physical_name
 from harnesspipe.stages.chain_settings import STEPS as CHAIN_STEPS
 from harnesspipe.stages.chain_settings import cases as chain_cases
@@ -176,6 +177,23 @@ def force_ratio(curve: pd.DataFrame, prepared) -> float:
     order = np.argsort(x, kind="stable")
     mask = (prepared.grid >= x[order][0]) & (prepared.grid <= x[order][-1] + 1e-9)
     return float(np.interp(prepared.grid[mask], x[order], F[order]).sum() / prepared.mean[mask].sum())
+
+
+def _times(x: float) -> str:
+    return f"{x:.2f}x"
+
+
+def couplings(curve: pd.DataFrame, prepared, cfg: dict, case: str) -> tuple[float, float]:
+    """(virtual test, test): each one's force at the end of the measured grid the curve
+    covers over the force of the case's wires bending each on its own
+    (:mod:`harnesspipe.models.free_wires`), i.e. how many times its wires' own force the
+    covering, the tape and the friction make the bundle carry."""
+    x = np.asarray(curve["deflection_mm"], dtype=float)
+    u_end = min(float(x.max()), float(prepared.grid[-1]))
+    F_free = free_wire_force(cfg, chain_cases(cfg)[case]["wires"], [u_end])
+    F = [np.interp(u_end, x, np.asarray(curve["force_N"], dtype=float)),
+         np.interp(u_end, prepared.grid, prepared.mean)]
+    return tuple(float(c) for c in coupling(F, np.repeat(F_free, 2)))
 
 
 def _row(stage, item, name, value, fit, cfg, *, paper, truth, error, error_of, goal, bounds, atol,
@@ -417,7 +435,7 @@ def _falls(results: Path, cfg: dict, measured: dict) -> str | None:
 
 def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
     """Each virtual test with a measured test: case, role, error, goal, its ``verdict``
-    (:func:`judge` with the hi-fi spread), force ratio."""
+    (:func:`judge` with the hi-fi spread), force ratio and ``coupling`` (:func:`couplings`)."""
     out = []
     for path in sorted((Path(results) / "hifi" / "virtual").glob("*/summary.json")):
         summary = json.loads(path.read_text())
@@ -426,9 +444,11 @@ def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
             continue
         role = str(summary.get("role", "prediction"))
         error, goal = float(m["error_rel"]), _goal(cfg, role)
+        curve = pd.read_csv(path.parent / "curve.csv")
         out.append({"case": case, "role": role, "error": error, "goal": goal,
                     "verdict": judge(error, goal, hifi_spread(cfg)),
-                    "ratio": force_ratio(pd.read_csv(path.parent / "curve.csv"), measured[case])})
+                    "ratio": force_ratio(curve, measured[case]),
+                    "coupling": couplings(curve, measured[case], cfg, case)})
     return out
 
 
@@ -466,6 +486,11 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
                    f"tests miss their goal, with relative errors of {_span([f['error'] for f in missed])}; "
                    f"their force is {_span(ratios)} of the measured force "
                    f"({'; '.join(physical_name(f['case'], cfg) + ': ' + _pct(f['ratio']) for f in missed)}).")
+        out.append("At the test's end each carries this many times its wires' own force (the wires bending "
+                   "each on its own; what the covering, the tape and the friction add), virtual test / test: "
+                   + "; ".join(f"{physical_name(f['case'], cfg)} {_times(f['coupling'][0])} / "
+                               f"{_times(f['coupling'][1])}" for f in missed)
+                   + ". Where the two differ, what misses is what holds the wires together: the wires themselves are the same in both.")
     near = [f for f in fid if f["verdict"] == NEAR]
     if near:
         out.append(f"{len(near)} virtual test{'s lie' if len(near) > 1 else ' lies'} within the run-to-run "
