@@ -1,0 +1,55 @@
+"""The ridged tube alone in three-point bending (models/tube_bending.py): the resolved
+corrugated wall against the smooth equivalent shell of the CWB model (issue 27, item 1)."""
+import numpy as np
+import pytest
+
+from harnesspipe.config import load
+from harnesspipe.models.tensile import TubeGeometry
+from harnesspipe.models.tube_bending import resolved_tube, tube_three_point
+
+
+@pytest.fixture(scope="module")
+def cfg():
+    return load()
+
+
+def test_the_resolved_wall_is_the_tensile_cells_sinusoid_with_a_crest_at_midspan():
+    g = TubeGeometry()
+    tube = resolved_tube(g, {"E": 1559.0, "nu": 0.42, "sigma_y": 8.6, "K": 25.6, "n": 0.12, "rho": 9e-10},
+                         152.4, 16, 8)
+    r = np.hypot(tube.X[:, 1], tube.X[:, 2])
+    r_t, r_c = g.mid_radii
+    assert r.min() == pytest.approx(r_t) and r.max() == pytest.approx(r_c)
+    assert r[tube.X[:, 0] == 0.0] == pytest.approx(r_c)                # the feeder meets a crest
+    assert tube.X[:, 0].max() == pytest.approx(76.2) and tube.X[:, 2].min() == 0.0   # the quarter
+
+
+def _slope(run, u0: float, u1: float) -> float:
+    """Least-squares slope through the origin of the force over u0 <= u <= u1 (the start's
+    ringing, a few % of the force, averaged out)."""
+    c = run.curve[(run.curve["deflection_mm"] >= u0) & (run.curve["deflection_mm"] <= u1)]
+    u, F = c["deflection_mm"].to_numpy(), c["force_N"].to_numpy()
+    return float(u @ F / (u @ u))
+
+
+def test_the_equivalent_shell_bends_like_the_resolved_corrugated_tube(cfg):
+    """Elastic range (1-3 mm, the paper's Table 2 closed tube), a coarse resolved wall (8
+    shells a pitch, 12 round): the tube's ovalisation under the pins and its bending come from
+    the homogenised hoop bending and axial membrane stiffness; within 10 %, quasi-static."""
+    mat = cfg["paper"]["table2"]["closed_tube"]
+    coarse = {"n_circ": 12, "per_pitch": 8}
+    resolved = tube_three_point(cfg, "closed_tube", mat, "resolved", resolution=coarse, deflection=3.0)
+    equivalent = tube_three_point(cfg, "closed_tube", mat, "equivalent", deflection=3.0)
+    for run in (resolved, equivalent):
+        end = run.history.iloc[-1]
+        assert end["KE"] < 0.02 * end["internal"] and run.summary["energy_error"] < 0.01
+    k_resolved, k_equivalent = _slope(resolved, 1.0, 3.0), _slope(equivalent, 1.0, 3.0)
+    assert k_equivalent == pytest.approx(k_resolved, rel=0.10)
+    assert k_resolved > 0.2                                # N/mm: it carries load (0.25)
+
+
+def test_a_tube_that_is_not_ridged_is_refused(cfg):
+    with pytest.raises(ValueError, match="fabric_tube.*not a ridged tube"):
+        tube_three_point(cfg, "fabric_tube", {}, "equivalent")
+    with pytest.raises(ValueError, match="wall 'smooth'"):
+        tube_three_point(cfg, "closed_tube", {}, "smooth")
