@@ -53,3 +53,21 @@ def test_the_table_gives_the_wires_own_force_each_curve_carries(tmp_path):
     measured = {case: Prepared(case, {}, u, F_free, F_free, F_free, {})}
     row = _fidelity_table(tmp_path, cfg, measured).split("<tr>")[2]
     assert "<td>200 %</td><td>2.00x / 1.00x</td></tr>" in row
+
+
+def test_a_run_block_says_how_far_the_wires_slid_and_whether_a_tie_damaged(tmp_path):
+    import pandas as pd
+
+    from harnesspipe.report.html import DEBOND_SEEN, SLIP_SEEN, _physical_rows
+    pd.DataFrame({"wire": [0, 1, 2], "type": [1, 2, 2], "left_mm": [0.2, 1.5, 0.4],
+                  "right_mm": [0.3, 0.1, 0.9]}).to_csv(tmp_path / "slip_out.csv", index=False)
+    summary = {"tie_separation_max_mm": 0.006, "debonded_ties": 0, "interface": {"delta0": 0.03}}
+    slip, ties = _physical_rows(tmp_path, summary)
+    assert slip == ["wires slid out of the taped ends [mm] (largest; median)",
+                    "1.50 (wire 1, type 2); 0.35", SLIP_SEEN]
+    assert ties == ["tape ties: largest separation [mm]", "0.006",
+                    f"no tie reached damage (0.2 of the onset delta0); {DEBOND_SEEN}"]
+    summary.update(tie_separation_max_mm=0.05)
+    assert _physical_rows(tmp_path, summary)[1][2].startswith("ties damaged (1.7 of the onset delta0), none")
+    summary.update(debonded_ties=3)
+    assert _physical_rows(tmp_path, summary)[1][2].startswith("3 ties debonded")

@@ -528,6 +528,32 @@ def _force_drop_rows(summary: dict) -> list[list]:
              f"{d['drop_N']:.3g} ({100.0 * d['fraction']:.0f} % of the peak)", check]]
 
 
+SLIP_SEEN = "the paper saw some wires slide out of the taped ends (Sec. 4.2.1, Fig. 12)"
+DEBOND_SEEN = "the paper saw the tape debond past about 20 mm (Sec. 4.2.1)"
+
+
+def _physical_rows(folder: Path, summary: dict) -> list[list]:
+    """The run's physical checks beside the paper's observations: how far the wires slid out
+    of the taped ends (slip_out.csv: each wire end against the covering's), and whether a
+    tape tie reached damage (its largest separation against the onset delta0)."""
+    rows = []
+    if (folder / "slip_out.csv").exists():
+        slip = pd.read_csv(folder / "slip_out.csv")
+        ends = slip[["left_mm", "right_mm"]].to_numpy()
+        w = int(np.argmax(ends.max(axis=1)))
+        rows.append(["wires slid out of the taped ends [mm] (largest; median)",
+                     f"{ends.max():.2f} (wire {int(slip['wire'][w])}, type {int(slip['type'][w])}); "
+                     f"{np.median(ends):.2f}", SLIP_SEEN])
+    sep, delta0 = summary.get("tie_separation_max_mm"), summary.get("interface", {}).get("delta0")
+    if sep is not None and delta0 is not None:
+        n = int(summary.get("debonded_ties", 0))
+        reach = f"{sep / delta0:.2g} of the onset delta0"
+        state = (f"{n} ties debonded" if n else f"ties damaged ({reach}), none debonded"
+                 if sep > delta0 else f"no tie reached damage ({reach})")
+        rows.append(["tape ties: largest separation [mm]", f"{sep:.3g}", f"{state}; {DEBOND_SEEN}"])
+    return rows
+
+
 def _hifi_run_block(title: str, folder: Path, measured, cfg: dict | None = None,
                     report_dir: Path | None = None) -> tuple[str, dict | None]:
     """Curve vs measured band, energies and the summary numbers of one hi-fi run."""
@@ -544,7 +570,7 @@ def _hifi_run_block(title: str, folder: Path, measured, cfg: dict | None = None,
     if (folder / "shapes.png").exists():
         data = base64.b64encode((folder / "shapes.png").read_bytes()).decode()
         figs.append(f'<img alt="shapes {html.escape(title)}" src="data:image/png;base64,{data}">')
-    numbers = solver_table(summary, cfg or {}) + _force_drop_rows(summary)
+    numbers = solver_table(summary, cfg or {}) + _force_drop_rows(summary) + _physical_rows(folder, summary)
     m = summary.get("measured")
     if m:
         numbers.append([f"||e||_l2 vs test {m['test_id']} [N]", m["error_l2"], ""])
