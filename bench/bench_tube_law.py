@@ -57,7 +57,7 @@ def _run(job):
     t0 = time.perf_counter()
     try:
         run = three_point(inputs(cfg, case, sets, table2, itf), n_shapes=1)
-    except ExplicitError as err:
+    except (ExplicitError, ValueError) as err:     # ValueError: a build the law does not model
         return {"case": case, "law": law, "failed": str(err).splitlines()[0]}
     wall = time.perf_counter() - t0
     c = run.curve
