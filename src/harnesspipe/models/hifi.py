@@ -36,7 +36,7 @@ import pandas as pd
 from harnesspipe.fe.assembly.groups import Cylinders, PinFacets, WirePins
 from harnesspipe.fe.assembly.lanes import stack_groups
 from harnesspipe.fe.contact.facet_pins import facets_cylinder_gaps
-from harnesspipe.fe.solvers.central_difference import DynamicsSettings, integrate, prescribed_work, ramp_share
+from harnesspipe.fe.solvers.central_difference import DynamicsSettings, integrate, ramp_share
 from harnesspipe.models import hifi_mesh as hm
 from harnesspipe.models.hifi_bundle import (FAMILIES, KE_IE_FROM, BundleSystem, HifiInputs,
                                             quasi_static_ratio)
@@ -63,11 +63,7 @@ class HifiSystem(BundleSystem):
         self.free[mid, 0] = self.free[mid, 2] = False    # axial and lateral rigid-body modes
         self._setup_pin_contacts()
         self.pin_args, self.cyl_force = self._pin_cylinders()
-        self.f_pin_prev = np.zeros_like(self.pins.force)
-        self.impulse = np.zeros_like(self.pins.force)
-        self.impulse_u = self.impulse_time = self.u_prev = 0.0
         self.last_force = 0.0                # mean feeder force of the last history row
-        self.c_prev = self.pins.centres.copy()
 
     def _setup_pin_contacts(self):
         """The wires against the pins as chains; the shells in one facet set per part (tube,
@@ -115,7 +111,6 @@ class HifiSystem(BundleSystem):
                     k=self._penalty(m[:self.nw]), hist=np.zeros((self.mesh.n_wires, 3, 3)))
 
     def _move_loading(self, t):
-        self.c_prev[...] = self.pins.centres
         self.pins.move_to(t)
 
     def _pin_cylinders(self):
@@ -133,28 +128,15 @@ class HifiSystem(BundleSystem):
         return pin_args, p.force
 
     def external_work(self, t0, t1) -> float:
-        """Work of the pins on the system: F_on_system = -force on the pin.  Also adds the
-        step's impulse of the pin forces (trapezoidal) for :meth:`observe`."""
-        p = self.pins
-        h = 0.5 * (t1 - t0)
-        w = prescribed_work(self.f_pin_prev, p.force, self.c_prev, p.centres, self.impulse, h)
-        u = p.feeder_displacement()
-        self.impulse_u += h * (self.u_prev + u)
-        self.impulse_time += t1 - t0
-        self.u_prev = u
-        return w
+        """Work of the pins on the system (:meth:`Pins.work`)."""
+        return self.pins.work(t0, t1)
 
     def observe(self, t) -> dict:
         """History row.  ``force_N`` (feeder), ``roller_force_N`` and ``deflection_mm`` are
-        MEANS since the previous row (impulse / time), as a load cell averages: the
-        instantaneous penalty contact force chatters at the contact frequency
-        (``force_N_instant``, ``deflection_mm_end``)."""
+        the load cell's MEANS since the previous row (:meth:`Pins.read`); the instantaneous
+        ones are ``force_N_instant`` and ``deflection_mm_end``."""
         p = self.pins
-        span = self.impulse_time
-        f = self.impulse / span if span > 0.0 else p.force
-        u = self.impulse_u / span if span > 0.0 else p.feeder_displacement()
-        self.impulse = np.zeros_like(p.force)
-        self.impulse_u = self.impulse_time = 0.0
+        f, u = p.read()
         self.last_force = float(f[p.feeder, 1])
         return {"deflection_mm": u, "deflection_mm_end": p.feeder_displacement(),
                 "force_N": float(f[p.feeder, 1]),

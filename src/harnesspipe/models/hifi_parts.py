@@ -12,7 +12,7 @@ from harnesspipe.fe.elements.beam import initial_frames, lobatto_points
 from harnesspipe.fe.elements.beam_explicit import (beam_forces, beam_lumped_mass, beam_plastic_work,
                                                    beam_stable_step)
 from harnesspipe.fe.materials.fiber import disc_fibres
-from harnesspipe.fe.solvers.central_difference import rate_ramp
+from harnesspipe.fe.solvers.central_difference import prescribed_work, rate_ramp
 
 
 class Wires:
@@ -82,7 +82,9 @@ class Pins:
     The feeder (index ``feeder``) moves by ``-deflection`` along y over the run at the
     test's constant rate, reached from rest over the first ``ramp`` of the run
     (:func:`harnesspipe.fe.solvers.central_difference.rate_ramp`):
-    ``y(t) = y0 - d S(t/T)``; the rollers stay.
+    ``y(t) = y0 - d S(t/T)``; the rollers stay.  The pins also keep the work they do on
+    the system (:meth:`work`) and, as a load cell, the means of their forces and of the
+    feeder's travel since the last reading (:meth:`read`).
     """
 
     def __init__(self, centres, radius, feeder, deflection, total_time, ramp):
@@ -96,11 +98,38 @@ class Pins:
         self.T = float(total_time)
         self.ramp = float(ramp)
         self.force = np.zeros_like(self.c0)        # force ON each pin (from the contacts)
+        self.c_prev = self.c0.copy()               # centres before the last move
+        self.f_prev = np.zeros_like(self.c0)       # force at the last step's end
+        self.impulse = np.zeros_like(self.c0)      # since the last reading
+        self.impulse_u = self.impulse_time = self.u_prev = 0.0
 
     def move_to(self, t):
+        self.c_prev[...] = self.centres
         S, dS = rate_ramp(t / self.T, self.ramp)
         self.centres[self.feeder, 1] = self.c0[self.feeder, 1] - self.deflection * S
         self.velocity[self.feeder, 1] = -self.deflection * dS / self.T
 
     def feeder_displacement(self):
         return self.c0[self.feeder, 1] - self.centres[self.feeder, 1]
+
+    def work(self, t0, t1) -> float:
+        """Work of the pins on the system over the step t0 -> t1 (F on the system = -force
+        on the pin, trapezoidal), and the step's impulse of the forces and of the travel."""
+        h = 0.5 * (t1 - t0)
+        w = prescribed_work(self.f_prev, self.force, self.c_prev, self.centres, self.impulse, h)
+        u = self.feeder_displacement()
+        self.impulse_u += h * (self.u_prev + u)
+        self.impulse_time += t1 - t0
+        self.u_prev = u
+        return w
+
+    def read(self) -> tuple[np.ndarray, float]:
+        """(force on each pin, feeder travel): MEANS since the last reading (impulse / time),
+        as a load cell averages -- the instantaneous penalty force chatters at the contact
+        frequency; the instantaneous values before the first step."""
+        span = self.impulse_time
+        f = self.impulse / span if span > 0.0 else self.force.copy()
+        u = self.impulse_u / span if span > 0.0 else self.feeder_displacement()
+        self.impulse = np.zeros_like(self.force)
+        self.impulse_u = self.impulse_time = 0.0
+        return f, u

@@ -35,8 +35,7 @@ import pandas as pd
 from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact, facets_cylinder_gaps
 from harnesspipe.fe.elements.shell_bt import (init_shell_state, shell_energies, shell_forces,
                                                shell_lumped_mass, shell_stable_step)
-from harnesspipe.fe.solvers.central_difference import (DynamicsSettings, integrate,
-                                                       prescribed_work, ramp_share)
+from harnesspipe.fe.solvers.central_difference import DynamicsSettings, integrate, ramp_share
 from harnesspipe.models.hifi_parts import Pins
 from harnesspipe.models.tensile import TubeGeometry
 from harnesspipe.models.tube_equivalent import equivalent_shell
@@ -147,10 +146,6 @@ class TubeBendingSystem:
         n_pins = self.pins.c0.shape[0]
         self.hist_q = np.full((n_pins, PIN_PATCHES), -1, dtype=np.int64)
         self.hist_ft = np.zeros((n_pins, PIN_PATCHES, 3))
-        self.f_prev = np.zeros_like(self.pins.force)
-        self.c_prev = self.pins.centres.copy()
-        self.impulse = np.zeros_like(self.pins.force)
-        self.impulse_u = self.impulse_time = self.u_prev = 0.0
 
     def _pins(self, tp: dict, ramp: float) -> Pins:
         """The roller at x = span/2 below, the feeder at 0 above, each moved onto the tube's
@@ -195,31 +190,19 @@ class TubeBendingSystem:
 
     def advance(self, du, t):
         self.x += du[:, :3]
-        self.c_prev[...] = self.pins.centres
         self.pins.move_to(t)
 
     def external_work(self, t0, t1) -> float:
-        p = self.pins
-        h = 0.5 * (t1 - t0)
-        w = prescribed_work(self.f_prev, p.force, self.c_prev, p.centres, self.impulse, h)
-        u = p.feeder_displacement()
-        self.impulse_u += h * (self.u_prev + u)
-        self.impulse_time += t1 - t0
-        self.u_prev = u
-        return w
+        return self.pins.work(t0, t1)
 
     def displacement_max(self) -> float:
         return float(np.max(np.abs(self.x - self.tube.X)))
 
     def observe(self, t) -> dict:
-        """The feeder's force (the whole tube's: ``copies`` x the model's) and travel as means
-        since the last row (a load cell's)."""
-        p, span = self.pins, self.impulse_time
-        f = self.impulse / span if span > 0.0 else p.force
-        u = self.impulse_u / span if span > 0.0 else p.feeder_displacement()
-        self.impulse[...] = 0.0
-        self.impulse_u = self.impulse_time = 0.0
-        return {"deflection_mm": u, "force_N": self.tube.copies * float(f[p.feeder, 1]),
+        """The feeder's force (the whole tube's: ``copies`` x the model's) and travel, the
+        load cell's means since the last row (:meth:`Pins.read`)."""
+        f, u = self.pins.read()
+        return {"deflection_mm": u, "force_N": self.tube.copies * float(f[self.pins.feeder, 1]),
                 "plastic": float(shell_energies(self.state)[2])}
 
 
