@@ -1,30 +1,31 @@
 """Cross-check at the paper's inputs over the build state (issue 27 item 5): the eq. 13
-E_eff of each Table 3 case's virtual test at the two bounds of the end bands' wraps, beside
-Table 3's E.
+E_eff of each Table 3 case's virtual test at the corners of the build inputs the chain fits
+(the end bands' wraps and the tape's wrapping tension), beside Table 3's E.
 
 Run with the project's venv: ``.venv/bin/python bench/bench_build_band.py [--profile quick]``.
 Replaces the section "## Hi-fi E_eff band over the build state" of bench/RESULTS.md.
 
 Each virtual test runs at the paper's Table 2 coverings and interface (config
 ``paper.table2``, ``paper.interface``: the inputs of the paper's own Table 3) with
-``end_tape_layers`` at either bound of ``hifi.pipeline.layers_bounds``; the rest of the build
-state at its default.  E_eff is eq. 13 on the run's curve (calibrate/eq13.effective_modulus,
+``end_tape_layers`` and ``tape_tension`` at the bounds of ``hifi.pipeline.layers_bounds``
+and ``tension_bounds``; the rest of the build state at its default.  E_eff is eq. 13 on the run's curve (calibrate/eq13.effective_modulus,
 the ROM stage's linear window).  Table 3's E falls inside the band when the build state the
 paper does not give could explain it.  Each run is one Numba thread; two run side by side.
 """
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 from multiprocessing import Pool
 
-from benchlib import write_section
+from benchlib import section_tail, write_section
 
 HEADING = "## Hi-fi E_eff band over the build state"
 
 
 def _run(job):
-    """(case, end_tape_layers, profile) -> (case, layers, E_eff, summary)."""
+    """(case, (end_tape_layers, tape_tension), profile) -> (case, corner, E_eff, summary)."""
     import os
     os.environ["NUMBA_NUM_THREADS"] = "1"
     from harnesspipe.calibrate.eq13 import effective_modulus
@@ -32,20 +33,20 @@ def _run(job):
     from harnesspipe.fe.solvers.central_difference import ExplicitError
     from harnesspipe.models.hifi import three_point
     from harnesspipe.stages.hifi import inputs
-    case, layers, profile = job
+    case, corner, profile = job
     cfg = load(overrides={"profile": profile})
     sets = {k: str(v) for k, v in cfg["paper"]["interface"].items()}
-    sets["end_tape_layers"] = str(layers)
+    sets["end_tape_layers"], sets["tape_tension"] = (str(v) for v in corner)
     for covering, props in cfg["paper"]["table2"].items():
         sets.update({f"{covering}.{k}": str(v) for k, v in props.items()})
     try:
         run = three_point(inputs(cfg, case, sets), n_shapes=1)
     except ExplicitError as err:          # a rejected run is a row of the table, not a crash
-        return case, layers, None, {"failed": str(err)}
+        return case, corner, None, {"failed": str(err)}
     c = run.curve
     E = effective_modulus(c["deflection_mm"].to_numpy(), c["force_N"].to_numpy(),
                           cfg["three_point"]["span"], cfg["cases"][case]["r_o"])
-    return case, layers, float(E), run.summary
+    return case, corner, float(E), run.summary
 
 
 def main() -> None:
@@ -54,36 +55,37 @@ def main() -> None:
     ap.add_argument("--profile", default="quick")
     args = ap.parse_args()
     cfg = load(overrides={"profile": args.profile})
-    bounds = cfg["hifi"]["pipeline"]["layers_bounds"]
+    pipe = cfg["hifi"]["pipeline"]
+    corners = [(w, T) for w in pipe["layers_bounds"] for T in pipe["tension_bounds"]]
     table3 = cfg["paper"]["table3"]
-    jobs = [(case, layers, args.profile) for case in table3 for layers in bounds]
+    jobs = [(case, c, args.profile) for case in table3 for c in corners]
     with Pool(2) as pool:
         results = pool.map(_run, jobs, chunksize=1)
-    E = {(case, layers): e for case, layers, e, _ in results}
-    failed = {(case, layers): s["failed"] for case, layers, _, s in results if "failed" in s}
+    E = {(case, c): e for case, c, e, _ in results}
+    failed = {(case, c): s["failed"] for case, c, _, s in results if "failed" in s}
     rows, out = [], {}
     for case, paper in table3.items():
-        pair = [E[(case, b)] for b in bounds]
-        out[case] = {"E_eff": pair, "table3_E": paper["E"]}
-        cells = " | ".join("failed" if e is None else f"{e:.1f}" for e in pair)
-        if None in pair:
-            inside = "n/a (a run failed, below)"
-        else:
-            lo, hi = sorted(pair)
-            inside = "yes" if lo <= paper["E"] <= hi else ("below" if paper["E"] < lo else "above")
+        band = [E[(case, c)] for c in corners]
+        out[case] = {"E_eff": band, "table3_E": paper["E"]}
+        cells = " | ".join("failed" if e is None else f"{e:.1f}" for e in band)
+        ok = [e for e in band if e is not None]
+        inside = ("n/a (no run)" if not ok else "yes" if min(ok) <= paper["E"] <= max(ok)
+                  else "below" if paper["E"] < min(ok) else "above")
         rows.append(f"| {case} | {cells} | {paper['E']:.1f} | {inside} |")
         print(rows[-1], flush=True)
-    notes = "".join(f"\n* {c}, {b:g} wraps: {why}" for (c, b), why in failed.items())
+    notes = "".join(f"\n* {c}, {w:g} wraps, {T:g} N: {why}" for (c, (w, T)), why in failed.items())
+    head = " | ".join(f"{w:g} wrap(s), {T:g} N" for w, T in corners)
     text = f"""{HEADING}
 
-`bench/bench_build_band.py --profile {args.profile}`: eq. 13 E_eff [MPa] of each Table 3 case's
-virtual test at the paper's Table 2 and interface, with the end bands' wraps at the bounds
-of `hifi.pipeline.layers_bounds` ({bounds[0]:g} and {bounds[1]:g}); Table 3's E beside it.
-"Table 3 in band": whether the build state the paper does not give could explain its E.
+`bench/bench_build_band.py --profile {args.profile}`, {datetime.date.today()}: eq. 13 E_eff [MPa] of
+each Table 3 case's virtual test at the paper's Table 2 and interface, at the corners of the
+build inputs the chain fits (`end_tape_layers` over `hifi.pipeline.layers_bounds`,
+`tape_tension` over `tension_bounds`, N); Table 3's E beside it.  "Table 3 in band": whether
+the build state the paper does not give could explain its E.
 
-| case | E_eff, {bounds[0]:g} wrap(s) | E_eff, {bounds[1]:g} wraps | Table 3 E | Table 3 in band |
-|---|---|---|---|---|
-""" + "\n".join(rows) + "\n" + notes + "\n"
+| case | {head} | Table 3 E | Table 3 in band |
+|---|{"---|" * len(corners)}---|---|
+""" + "\n".join(rows) + "\n" + notes + "\n\n" + section_tail(HEADING)
     write_section(HEADING, text)
     print(json.dumps(out, indent=1))
 
