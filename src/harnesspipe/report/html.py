@@ -856,7 +856,7 @@ def _fidelity_table(root: Path, cfg: dict, measured: dict | None = None) -> str:
         if measured and case in measured and (path.parent / "curve.csv").exists():
             curve = pd.read_csv(path.parent / "curve.csv")
             ratio = f"{100 * verdict.force_ratio(curve, measured[case]):.0f} %"
-            carried = "{:.2f}x / {:.2f}x".format(*verdict.couplings(curve, measured[case], cfg, case))
+            carried = " / ".join(map(verdict.times, verdict.couplings(curve, measured[case], cfg, case)))
         rows.append(f"<tr><td>{html.escape(labelled(case, cfg))}</td><td>{html.escape(role)}</td>"
                     f"<td>{100 * err:.1f}&nbsp;%</td><td>{100 * goal:.0f}&nbsp;%</td>{cell}<td>{ratio}</td>"
                     f"<td>{carried}</td></tr>")

@@ -179,7 +179,8 @@ def force_ratio(curve: pd.DataFrame, prepared) -> float:
     return float(np.interp(prepared.grid[mask], x[order], F[order]).sum() / prepared.mean[mask].sum())
 
 
-def _times(x: float) -> str:
+def times(x: float) -> str:
+    """A multiple in words: '2.53x'."""
     return f"{x:.2f}x"
 
 
@@ -488,8 +489,8 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
                    f"({'; '.join(physical_name(f['case'], cfg) + ': ' + _pct(f['ratio']) for f in missed)}).")
         out.append("At the test's end each carries this many times its wires' own force (the wires bending "
                    "each on its own; what the covering, the tape and the friction add), virtual test / test: "
-                   + "; ".join(f"{physical_name(f['case'], cfg)} {_times(f['coupling'][0])} / "
-                               f"{_times(f['coupling'][1])}" for f in missed)
+                   + "; ".join(f"{physical_name(f['case'], cfg)} {times(f['coupling'][0])} / "
+                               f"{times(f['coupling'][1])}" for f in missed)
                    + ". Where the two differ, what misses is what holds the wires together: the wires themselves are the same in both.")
     near = [f for f in fid if f["verdict"] == NEAR]
     if near:
