@@ -9,7 +9,8 @@ For each calibration case of the chain (Sec. 4.2: the closed and the half-lap CW
 friction and cohesive steps, the t2 fabric CWB for E2/E1) and each input, one virtual test
 with the input moved by STEP (relative; the build state's ``wire_fill`` and ``tape_tension``
 by an absolute step, their defaults being 0, the closures down by one, their defaults being the
-upper bound 1, ``pack_angle`` by 2 deg) against the base run at the config's start values (a build input at the chain's
+upper bound 1, ``pack_angle`` by 2 deg; a tube's corrugation pitch ``<tube>.pitch``, an
+assumption of the paper's Table 2 geometry, by STEP like an interface input) against the base run at the config's start values (a build input at the chain's
 start: :func:`harnesspipe.stages.chain_settings.build_start`) and the paper's Table 2.  The normalised sensitivity of a window is
 
     S = (||F' - F|| / ||F||) / (dp / p)     (l2 over the measured grid inside the window)
@@ -40,9 +41,10 @@ ABSOLUTE = {"wire_fill": 0.5, "tape_tension": 2.0,      # defaults 0: absolute s
 RECORD = Path(__file__).resolve().parent / "sensitivity.json"
 COMMON = ("pack_angle", "wire_fill", "tape_tension", "mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d")
 CASES = {                      # calibration case -> (its windows, the inputs that can act on it)
-    "cwb19_t2_closed": (("friction_window", "cohesive_window"), ("end_tape_layers",) + COMMON),
+    "cwb19_t2_closed": (("friction_window", "cohesive_window"),
+                        ("end_tape_layers", "closed_tube.pitch") + COMMON),
     "cwb19_t2_open_halflap": (("friction_window", "cohesive_window"),
-                              ("end_tape_layers", "tube_closure") + COMMON),
+                              ("end_tape_layers", "tube_closure", "open_tube.pitch") + COMMON),
     "cwb19_t2_fabric": (("fabric_window",),
                         ("fabric_end_tape_layers", "sleeve_closure") + COMMON + ("E2_over_E1",)),
 }
@@ -64,6 +66,8 @@ def moved(cfg: dict, name: str) -> float:
     from harnesspipe.stages.hifi import parameters
     if name in cfg["hifi"]["build"]:
         value = build_start(cfg, name)
+    elif name.endswith(".pitch"):                  # <tube>.pitch: the covering's geometry
+        value = cfg["coverings"][name.split(".")[0]]["pitch"]
     else:
         value = parameters(cfg, {})["interface"][name]
     return value + ABSOLUTE[name] if name in ABSOLUTE else value * (1.0 + STEP)

@@ -21,27 +21,34 @@ BARELY = 0.05      # S below this: the window's curve barely sees the input
 FIELDS = ("commit", "profile", "date", "step", "rows")
 
 
-def read_record(path: Path | None) -> dict | None:
-    """The screen's record, or None when there is none; a broken one raises ValueError naming
-    the file and what was expected."""
+def read_json_record(path: Path | None, expected: str, fields: tuple, row_ok) -> dict | None:
+    """A bench's JSON record (an object with ``fields``, its ``rows`` a list of which each
+    passes ``row_ok``), or None when there is none; a broken one raises ValueError naming the
+    file, what was ``expected`` and what is wrong."""
     if path is None or not Path(path).exists():
         return None
-    expected = (f"{path}: expected bench/bench_sensitivity.py's record, a JSON object with "
-                f"{', '.join(FIELDS)} (rows: case, input, S per window)")
+    expected = f"{path}: expected {expected}"
     try:
         record = json.loads(Path(path).read_text())
     except ValueError as exc:
         raise ValueError(f"{expected}; it is not JSON ({exc})") from None
-    if not isinstance(record, dict) or any(k not in record for k in FIELDS):
-        raise ValueError(f"{expected}; missing: {[k for k in FIELDS if k not in record]}")
+    if not isinstance(record, dict) or any(k not in record for k in fields):
+        missing = [k for k in fields if not isinstance(record, dict) or k not in record]
+        raise ValueError(f"{expected}; missing: {missing}")
     if not isinstance(record["rows"], list):
         raise ValueError(f"{expected}; rows is not a list")
-    bad = [i for i, row in enumerate(record["rows"])
-           if not (isinstance(row, dict) and {"case", "input", "S"} <= row.keys()
-                   and isinstance(row["S"], dict))]
+    bad = [i for i, row in enumerate(record["rows"]) if not (isinstance(row, dict) and row_ok(row))]
     if bad:
         raise ValueError(f"{expected}; rows {bad} are not so")
     return record
+
+
+def read_record(path: Path | None) -> dict | None:
+    """The screen's record, or None when there is none (:func:`read_json_record`)."""
+    return read_json_record(
+        path, f"bench/bench_sensitivity.py's record, a JSON object with {', '.join(FIELDS)} "
+              "(rows: case, input, S per window)", FIELDS,
+        lambda row: {"case", "input", "S"} <= row.keys() and isinstance(row["S"], dict))
 
 
 def fitted_by(name: str) -> str:
