@@ -5,6 +5,7 @@ import json
 
 from harnesspipe import config
 from harnesspipe.report.html import _fidelity_table
+from harnesspipe.report.verdict import hifi_fidelity
 
 
 def _virtual(root, case, role, error_rel):
@@ -47,11 +48,12 @@ def test_the_table_gives_the_wires_own_force_each_curve_carries(tmp_path):
     case = "cwb10t1_9t2_fabric"
     u = np.linspace(0.0, 30.0, 31)
     F_free = free_wire_force(cfg, cfg["cases"][case]["wires"], u)
-    _virtual(tmp_path, case, "validation", 0.40)
+    root = tmp_path / "hifi"
+    _virtual(root, case, "validation", 0.40)
     pd.DataFrame({"deflection_mm": u, "force_N": 2.0 * F_free}).to_csv(
-        tmp_path / "virtual" / case / "curve.csv", index=False)
+        root / "virtual" / case / "curve.csv", index=False)
     measured = {case: Prepared(case, {}, u, F_free, F_free, F_free, {})}
-    row = _fidelity_table(tmp_path, cfg, measured).split("<tr>")[2]
+    row = _fidelity_table(root, cfg, hifi_fidelity(tmp_path, cfg, measured)).split("<tr>")[2]
     assert "<td>200 %</td><td>2.00x / 1.00x</td></tr>" in row
 
 

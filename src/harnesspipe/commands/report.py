@@ -18,13 +18,16 @@ def register(sub) -> None:
     p.add_argument("--out", type=Path, required=True)
     p.add_argument("--screen", type=Path, default=None,
                    help="the hi-fi sensitivity screen's record (bench/sensitivity.json), shown if given")
+    p.add_argument("--band", type=Path, default=None,
+                   help="the record of Table 3's E_eff band over the build state "
+                        "(bench/build_band.json), shown if given")
     p.set_defaults(func=_report)
 
 
 def _report(args) -> int:
     from harnesspipe.cli import InputError
+    from harnesspipe.report import band, screen
     from harnesspipe.report.html import STAGES, build
-    from harnesspipe.report.screen import read_record
     cfg = cfgmod.load(args.config)
     fits: dict[str, list[Path]] = {}
     for item in args.fits:
@@ -32,12 +35,21 @@ def _report(args) -> int:
         if not sep or stage not in STAGES:
             raise InputError(f"report --fits {item!r}: expected STAGE=PATH with STAGE in {sorted(STAGES)}")
         fits.setdefault(stage, []).append(Path(path))
-    if args.screen is not None and not args.screen.exists():
-        raise InputError(f"report --screen {args.screen}: no such file")
-    try:
-        record = read_record(args.screen)
-    except ValueError as exc:
-        raise InputError(f"report --screen: {exc}") from None
+    records = {option: _record(args, option, read) for option, read in
+               (("screen", screen.read_record), ("band", band.read_record))}
     print(build(args.out, cfg=cfg, results=args.results, check_summary=args.check,
-                prepared=args.prepared, fits=fits, screen_record=record))
+                prepared=args.prepared, fits=fits, screen_record=records["screen"],
+                band_record=records["band"]))
     return 0
+
+
+def _record(args, option: str, read):
+    """The bench record given as ``--<option>``, read by ``read``; None when not given."""
+    from harnesspipe.cli import InputError
+    path = getattr(args, option)
+    if path is not None and not path.exists():
+        raise InputError(f"report --{option} {path}: no such file")
+    try:
+        return read(path)
+    except ValueError as exc:
+        raise InputError(f"report --{option}: {exc}") from None

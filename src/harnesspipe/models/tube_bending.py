@@ -182,7 +182,7 @@ class TubeBendingSystem:
                      self.f_el, F[0], sign=-1.0)
         p = self.pins
         p.force[...] = 0.0
-        self.active = facets_cylinder_contact(
+        facets_cylinder_contact(
             self.x, v, self.tube.conn, self.tube.contact_t, self.mu, p.centres, p.axes, p.radii,
             np.zeros(3), p.velocity, self.k_n, self.k_n, dt, self.hist_q, self.hist_ft, F[1], F[2],
             p.force)

@@ -24,7 +24,7 @@ import pandas as pd
 from harnesspipe import __version__
 from harnesspipe.calibrate.uncertainty import Z95
 from harnesspipe.data.synthesize import read_truth
-from harnesspipe.report import links, plots, screen, verdict
+from harnesspipe.report import band, links, plots, screen, verdict
 from harnesspipe.report.names import labelled, physical_name, solver_statistics
 from harnesspipe.stages.chain_settings import STEPS
 from harnesspipe.stages.common import read_fit
@@ -835,11 +835,13 @@ def _cost_table(cost: _HifiCost, paper_cost: dict) -> str:
             + _table(["item", "hi-fi runs", "wall per run [s]", "wall total [min]"], rows))
 
 
-def _fidelity_table(root: Path, cfg: dict, measured: dict | None = None) -> str:
+def _fidelity_table(root: Path, cfg: dict, fidelity: list[dict] | None = None) -> str:
     """Each virtual test's relative l2 error against its measured mean beside the goal of its
-    role (config ``hifi.pipeline.fidelity_goal``): met, or missed and by how much; with the
-    measured tests (``measured``), the share of the measured force the model reaches."""
+    role (config ``hifi.pipeline.fidelity_goal``): met, or missed and by how much; for the
+    cases with a measured test (``fidelity``: :func:`verdict.hifi_fidelity`), the share of the
+    measured force the model reaches and the wires' own force each curve carries."""
     goals = cfg["hifi"]["pipeline"]["fidelity_goal"]
+    tested = {f["case"]: f for f in fidelity or ()}
     rows = []
     for path in sorted((root / "virtual").glob("*/summary.json")):
         summary = _read_json(path)
@@ -853,10 +855,9 @@ def _fidelity_table(root: Path, cfg: dict, measured: dict | None = None) -> str:
         css, words = judged(err, goal, verdict.hifi_spread(cfg))
         cell = f"<td class='{css}'>{html.escape(words)}</td>" if css else f"<td>{words}</td>"
         ratio = carried = ""
-        if measured and case in measured and (path.parent / "curve.csv").exists():
-            curve = pd.read_csv(path.parent / "curve.csv")
-            ratio = f"{100 * verdict.force_ratio(curve, measured[case]):.0f} %"
-            carried = " / ".join(map(verdict.times, verdict.couplings(curve, measured[case], cfg, case)))
+        if case in tested:
+            ratio = f"{100 * tested[case]['ratio']:.0f} %"
+            carried = " / ".join(map(verdict.times, tested[case]["coupling"]))
         rows.append(f"<tr><td>{html.escape(labelled(case, cfg))}</td><td>{html.escape(role)}</td>"
                     f"<td>{100 * err:.1f}&nbsp;%</td><td>{100 * goal:.0f}&nbsp;%</td>{cell}<td>{ratio}</td>"
                     f"<td>{carried}</td></tr>")
@@ -879,10 +880,12 @@ def _fidelity_table(root: Path, cfg: dict, measured: dict | None = None) -> str:
 
 
 def hifi_section(results: Path, cfg: dict, measured: dict, report_dir: Path | None = None,
-                 screen_record: dict | None = None) -> str:
-    """Everything of results/hifi that exists: cross-check Table 3, the calibration chain,
-    the interface beside the paper's, the sensitivity screen's record, the virtual tests,
-    their energies and the cost."""
+                 screen_record: dict | None = None, band_record: dict | None = None,
+                 fidelity: list[dict] | None = None) -> str:
+    """Everything of results/hifi that exists: cross-check Table 3 (and the record of its
+    band over the build state), the calibration chain, the interface beside the paper's, the
+    sensitivity screen's record, the virtual tests, their energies and the cost.
+    ``fidelity``: :func:`verdict.hifi_fidelity` when the caller has it already."""
     heading = f"<h2 id='hifi'>{html.escape(STAGES['hifi'][0])}</h2>"
     root = Path(results) / "hifi"
     runs = sorted(root.glob("*/*/summary.json")) + sorted(root.glob("chain/*/*/summary.json"))
@@ -892,8 +895,10 @@ def hifi_section(results: Path, cfg: dict, measured: dict, report_dir: Path | No
         return heading + NO_HIFI_NOTE
     paper = cfg.get("paper", {})
     ctx = _HifiContext(cfg, measured, report_dir)
-    parts = [heading, HIFI_INTRO, _fidelity_table(root, cfg, measured), _crosscheck_table(root, cfg),
-             _crosscheck_rom_figures(root, cfg),
+    if fidelity is None:
+        fidelity = verdict.hifi_fidelity(results, cfg, measured)
+    parts = [heading, HIFI_INTRO, _fidelity_table(root, cfg, fidelity), _crosscheck_table(root, cfg),
+             band.section(band_record, cfg), _crosscheck_rom_figures(root, cfg),
              _interface_table(root, fits, cfg), screen.section(screen_record)]
     parts += [_calibration_step(p, paper, ctx) for p in fits]
     parts += [_single_runs(root, runs, ctx), _cost_table(ctx.cost, paper.get("cost", {}))]
@@ -1141,21 +1146,26 @@ def with_toc(body: str, first: str = "verdict") -> tuple[str, str]:
 
 
 def build(out: Path, *, cfg: dict, results: Path, check_summary: Path,
-          prepared: list[Path], fits: dict[str, list[Path]], screen_record: dict | None = None) -> Path:
+          prepared: list[Path], fits: dict[str, list[Path]], screen_record: dict | None = None,
+          band_record: dict | None = None) -> Path:
     """Write the report to ``out`` (atomically) and return its path; ``screen_record``: the
-    sensitivity screen's (:func:`harnesspipe.report.screen.read_record`), if any."""
+    sensitivity screen's (:func:`harnesspipe.report.screen.read_record`), ``band_record``:
+    Table 3's band over the build state (:func:`harnesspipe.report.band.read_record`), if any."""
     results, out = Path(results), Path(out)
     report_dir = out.parent
     truth = read_truth(Path(cfg["data_dir"]))
     measured = _measured_by_case(prepared)
     rows = verdict.verdict_rows(cfg, results, fits, truth, measured)
+    fidelity = verdict.hifi_fidelity(results, cfg, measured)     # free-wire ROM runs: once
     sections = [verdict_section(rows, cfg),
-                limitations_section(verdict.limitations(rows, cfg, results, fits, truth, measured)),
+                limitations_section(verdict.limitations(rows, cfg, results, fits, truth, measured,
+                                                        fidelity)),
                 parameters_section(rows, cfg, truth),
                 data_section(Path(check_summary).read_text().strip(), prepared, truth, cfg)]
     for stage in SECTION_ORDER:
         if stage == "hifi":
-            sections.append(hifi_section(results, cfg, measured, report_dir, screen_record))
+            sections.append(hifi_section(results, cfg, measured, report_dir, screen_record, band_record,
+                                         fidelity))
         elif fits.get(stage):
             sections.append(stage_section(stage, fits[stage], results, cfg, truth, measured, rows=rows,
                                           report_dir=report_dir))

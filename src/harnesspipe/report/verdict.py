@@ -462,8 +462,9 @@ def chain_mesh(cfg: dict) -> str | None:
 
 
 def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: dict,
-                measured: dict) -> list[str]:
-    """Sentences on what not to trust, each produced by a condition on the results."""
+                measured: dict, fidelity: list[dict] | None = None) -> list[str]:
+    """Sentences on what not to trust, each produced by a condition on the results;
+    ``fidelity``: :func:`hifi_fidelity` when the caller has it already."""
     out = []
     profile = cfg.get("profile", "default")
     chain = chain_mesh(cfg)
@@ -479,7 +480,7 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
                    + (f", with its budget ({searches})," if searches else "")
                    + f" and the virtual tests on the {profile} profile's (hifi.pipeline.chain_profile), "
                    "so a calibration case's error includes the difference between the meshes.")
-    fid = hifi_fidelity(results, cfg, measured)
+    fid = hifi_fidelity(results, cfg, measured) if fidelity is None else fidelity
     missed = [f for f in fid if f["verdict"] == MISSED]
     if missed:
         ratios = [f["ratio"] for f in missed]
