@@ -108,7 +108,7 @@ def test_pure_bending_of_a_segment_matches_the_ring_integral(wall):
     """A tube segment (24 elements round) bent to curvature K by prescribed kinematics of
     its nodes (plane sections, no ovalisation): the bending moment of the elements' axial
     resultants, sum N_xx y ds, against the ring integral of the cell law
-    M(K) = int N(-K y) (-y) R dphi over the same circle, within 2 % up to 8 % wall strain
+    M(K) = int N(-K y) (-y) R dphi over the same circle, within 2 % up to 12 % wall strain
     (the wall's extension is -K y per unit length, the cell's extension / gauge)."""
     R, n_circ, L = wall["radius"], 24, 2.0
     phi = np.linspace(0.0, 2 * np.pi, n_circ + 1)[:-1]
@@ -117,7 +117,7 @@ def test_pure_bending_of_a_segment_matches_the_ring_integral(wall):
     conn = np.array([[i, (i + 1) % n_circ, n_circ + (i + 1) % n_circ, n_circ + i]
                      for i in range(n_circ)], dtype=np.int64)
     axis = np.tile([1.0, 0.0, 0.0], (n_circ, 1))
-    K_max = 0.08 / R
+    K_max = 0.12 / R
     row = np.tile(wall_row(wall, bt.MAT_TUBE), (n_circ, 1))
     h = np.full(n_circ, wall["mass_thickness"])
     st = bt.init_shell_state(X, conn, h, axis)
