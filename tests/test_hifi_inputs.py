@@ -76,7 +76,7 @@ def test_build_state_keys_reach_the_run():
     with pytest.raises(ConfigError, match="end_tape_layers=0.5: expected a number of wraps"):
         inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "0.5"})
     assert inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "2.5"}).config["hifi"]["build"] == {
-        "pack_angle": 1.0, "wire_fill": 0.0, "tube_closure": 1.0, "sleeve_closure": 1.0, "end_tape_layers": 2.5, "fabric_end_tape_layers": None, "tape_tension": 0.0}
+        "pack_angle": 1.0, "wire_fill": 0.0, "tube_closure": 1.0, "sleeve_closure": 1.0, "end_tape_layers": 2.5, "end_tape_binds": 0, "fabric_end_tape_layers": None, "tape_tension": 0.0}
     assert inputs(cfg, "cwb19_t2_closed", {"pack_angle": "7.5"}).config["hifi"]["build"]["pack_angle"] == 7.5
     with pytest.raises(ConfigError, match="pack_angle=45: expected a turn of the wire pack"):
         inputs(cfg, "cwb19_t2_closed", {"pack_angle": "45"})
@@ -173,6 +173,17 @@ def test_sleeve_closure_is_a_set_key_of_the_fabric():
     assert rho1[fab1][0] == rho0[fab0][0]
     with pytest.raises(ConfigError, match="sleeve_closure=1.2: expected a fraction"):
         inputs(cfg, "cwb19_t2_fabric", {"sleeve_closure": "1.2"})
+
+
+def test_end_tape_binds_is_a_set_key_of_zero_or_one():
+    """``--set end_tape_binds=1`` reaches the build state; anything but 0 or 1 is refused
+    naming the key and its two meanings."""
+    cfg = load()
+    assert cfg["hifi"]["build"]["end_tape_binds"] == 0
+    assert inputs(cfg, "cwb19_t2_closed", {"end_tape_binds": "1"}).config["hifi"]["build"]["end_tape_binds"] == 1.0
+    with pytest.raises(ConfigError, match=r"end_tape_binds=0.5: expected 0 \(the wires the end band "
+                                          r"touches\) or 1 \(every wire under it\), a whole number"):
+        inputs(cfg, "cwb19_t2_closed", {"end_tape_binds": "0.5"})
 
 
 def test_corrugation_pitch_is_a_set_key_of_the_tubes():

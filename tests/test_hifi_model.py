@@ -448,3 +448,49 @@ def _tie_rows_against_stiffness(s, itf, ties):
             if N[a] == 0.0:
                 unseen = max(unseen, row / k[i])
     return ratio, unseen
+
+
+def _closed_quick(binds: str):
+    from harnesspipe.models import hifi, hifi_mesh as hm
+    from harnesspipe.stages.hifi import inputs
+    inp = inputs(load(overrides={"profile": "quick"}), "cwb19_t2_closed", {"end_tape_binds": binds})
+    return hifi.HifiSystem(hm.build_mesh(inp.case, inp.config, inp.resolution), inp)
+
+
+def _tied_wires(s, side: float) -> set:
+    """Wires holding a beam tie at the ``side`` (-1, +1) end of the sample."""
+    out = set()
+    for t in (t for t in s.ties if t["kind"] == "beam"):
+        on_side = np.sign(s.x[t["tie_node"], 0] - s.x[:, 0].mean()) == side
+        out |= set(s.mesh.beam_wire[t["tie_seg"][on_side]].tolist())
+    return out
+
+
+def test_end_tape_binds_every_wire_with_the_bands_bond_area_shared():
+    """``end_tape_binds`` 0 (default): the end bands tie only wires of the 1-6-12 bundle's
+    outer ring, the ones their nodes touch (8 of 12 with the quick mesh's 8 nodes round), the
+    inner 7 none.  1: every wire at both ends; the extra ties of each band node share its
+    bond area (their areas sum to its own), and at rest every tie is unstretched whatever
+    its lever arm (the ties exert no force in the undeformed state)."""
+    from hifi_reference import separate_forces
+    touching, every = _closed_quick("0"), _closed_quick("1")
+    r = np.linalg.norm(touching.mesh.wire_yz - touching.mesh.wire_yz.mean(axis=0), axis=1)
+    outer = set(np.argsort(r)[7:].tolist())
+    held = _tied_wires(touching, -1.0) | _tied_wires(touching, 1.0)
+    assert 8 <= len(held) and held <= outer
+    for side in (-1.0, 1.0):
+        assert _tied_wires(every, side) == set(range(19))
+    base = {id(t) for t in every.ties[:len(touching.ties)]}
+    extra = [t for t in every.ties if id(t) not in base]
+    assert len(extra) == 2 * (19 - len(held))        # one group per loose wire and end
+    own = dict(zip(*[np.concatenate(a) for a in zip(*[(t["tie_node"], t["tie_area"]) for t in touching.ties
+                                                     if t["kind"] == "beam"])]))
+    shared = {}
+    for t in extra:
+        for node, a in zip(t["tie_node"], t["tie_area"]):
+            shared[node] = shared.get(node, 0.0) + a
+    assert set(shared) <= set(own)
+    assert np.allclose([shared[n] for n in shared], [own[n] for n in shared], rtol=1e-12)
+    assert max(np.linalg.norm(t["tie_arm"], axis=1).max() for t in extra) > 2.0   # across the bundle
+    F, _ = separate_forces(every, np.zeros_like(every.mass), 1e-6)
+    assert np.abs(F[5]).max() < 1e-9

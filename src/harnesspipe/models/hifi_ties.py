@@ -58,12 +58,7 @@ class BundleTies:
             if target == hm.TIE_WIRES:
                 _, ties = make_ties(self.x, nodes, area, seg=self.seg, seg_r=self.seg_r,
                                        tape_half_t=tape_t, tol=TIE_TOL[target])
-                ends = self.seg[ties["tie_seg"]]
-                s_ = ties["tie_s"]
-                P = (1.0 - s_)[:, None] * self.x[ends[:, 0]] + s_[:, None] * self.x[ends[:, 1]]
-                ties["tie_anchor"] = np.where(s_ < 0.5, ends[:, 0], ends[:, 1]).astype(np.int64)
-                ties["tie_arm"] = np.ascontiguousarray(self.x[ties["tie_node"]] - P)
-                ties["tie_axis"] = np.ascontiguousarray(ties["tie_t0"])
+                self._lever(ties)
                 kind = "beam"
             else:
                 quads = (self.sconn[mesh.shell_part != hm.PART_TAPE] if target == hm.TIE_COVERING
@@ -78,8 +73,48 @@ class BundleTies:
             if ties["tie_node"].size:
                 ties["kind"] = kind
                 self.ties.append(ties)
+        if self.inp.config["hifi"]["build"].get("end_tape_binds", 0.0) >= 1.0:
+            self._bind_every_wire(tape_t)
         if not itf["delta_f"] > itf["delta0"]:
             raise ValueError(f"cohesive: delta_f = {itf['delta_f']} must exceed delta0 = {itf['delta0']}")
+
+    def _lever(self, ties):
+        """A beam tie group's anchor (the nearer end node of its segment), lever arm (tied
+        node minus the segment point) and axis, for :func:`cohesive_ties_beam`."""
+        ends = self.seg[ties["tie_seg"]]
+        s_ = ties["tie_s"]
+        P = (1.0 - s_)[:, None] * self.x[ends[:, 0]] + s_[:, None] * self.x[ends[:, 1]]
+        ties["tie_anchor"] = np.where(s_ < 0.5, ends[:, 0], ends[:, 1]).astype(np.int64)
+        ties["tie_arm"] = np.ascontiguousarray(self.x[ties["tie_node"]] - P)
+        ties["tie_axis"] = np.ascontiguousarray(ties["tie_t0"])
+
+    def _bind_every_wire(self, tape_t: float):
+        """Build ``end_tape_binds`` 1: the end bands bind every wire under them, not only
+        the ones they touch.  Each end-band node over the bare wires is also tied to the
+        closest point of every wire no band node touches (the inner wires of a packed
+        bundle), on a lever arm across the wires between (the squeezed end moving as
+        one); the node's bond area is shared among those wires, so the band node's own
+        tie stiffness is doubled, not multiplied by their number."""
+        mesh = self.mesh
+        for group in (hm.GROUP_END_LEFT, hm.GROUP_END_RIGHT):
+            band = np.unique(self.sconn[mesh.shell_group == group])
+            sel = (mesh.tie_target == hm.TIE_WIRES) & np.isin(mesh.tie_nodes, band)
+            nodes, area = mesh.tie_nodes[sel], mesh.tie_area[sel]
+            held = {int(w) for t in self.ties if t["kind"] == "beam"
+                    for w in mesh.beam_wire[t["tie_seg"][np.isin(t["tie_node"], band)]]}
+            loose = [w for w in range(mesh.n_wires) if w not in held]
+            if not nodes.size or not loose:
+                continue
+            centre = mesh.wire_yz.mean(axis=0)
+            reach = 2.0 * float(np.max(np.linalg.norm(self.x[nodes, 1:3] - centre, axis=1)))
+            for w in loose:
+                segs = np.flatnonzero(mesh.beam_wire == w)
+                _, ties = make_ties(self.x, nodes, area / len(loose), seg=self.seg[segs],
+                                    seg_r=self.seg_r[segs], tape_half_t=tape_t, tol=reach)
+                ties["tie_seg"] = segs[ties["tie_seg"]]
+                self._lever(ties)
+                ties["kind"] = "beam"
+                self.ties.append(ties)
 
     def _tie_targets(self, ties):
         """The target nodes (n, k) of a tie group and their weights (n, k): the quad's
