@@ -468,7 +468,7 @@ def _tied_wires(s, side: float) -> set:
 
 def test_end_tape_binds_every_wire_with_the_bands_bond_area_shared():
     """``end_tape_binds`` 0 (default): the end bands tie only wires of the 1-6-12 bundle's
-    outer ring, the ones their nodes touch (8 of 12 with the quick mesh's 8 nodes round), the
+    outer ring, the ones their nodes touch (8 of 12 with the quick and the default mesh), the
     inner 7 none.  1: every wire at both ends; the extra ties of each band node share its
     bond area (their areas sum to its own), and at rest every tie is unstretched whatever
     its lever arm (the ties exert no force in the undeformed state)."""
