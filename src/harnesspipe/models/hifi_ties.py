@@ -91,10 +91,10 @@ class BundleTies:
     def _bind_every_wire(self, tape_t: float):
         """Build ``end_tape_binds`` 1: the end bands bind every wire under them, not only
         the ones they touch.  Each end-band node over the bare wires is also tied to the
-        closest point of every wire no band node touches (the inner wires of a packed
-        bundle), on a lever arm across the wires between (the squeezed end moving as
-        one); the node's bond area is shared among those wires, so the band node's own
-        tie stiffness is doubled, not multiplied by their number."""
+        closest point of every wire no node of that band touches (of the 19-wire bundle:
+        the 7 inner wires and 4 of the outer ring), on a lever arm across the wires between
+        (the squeezed end moving as one); the node's bond area is shared among those wires,
+        so their ties together are as stiff as one tie of the node, not as their number."""
         mesh = self.mesh
         for group in (hm.GROUP_END_LEFT, hm.GROUP_END_RIGHT):
             band = np.unique(self.sconn[mesh.shell_group == group])
