@@ -8,7 +8,7 @@ bench/sensitivity.json, which the pipeline's report shows (report/screen.py).
 For each calibration case of the chain (Sec. 4.2: the closed and the half-lap CWB for the
 friction and cohesive steps, the t2 fabric CWB for E2/E1) and each input, one virtual test
 with the input moved by STEP (relative; the build state's ``wire_fill`` and ``tape_tension``
-by an absolute step, their defaults being 0, the closures down by one, their defaults being the
+by an absolute step, their defaults being 0, ``end_tape_binds`` from 0 to 1, the closures down by one, their defaults being the
 upper bound 1, ``pack_angle`` by 2 deg; a tube's corrugation pitch ``<tube>.pitch``, an
 assumption of the paper's Table 2 geometry, by STEP like an interface input) against the base run at the config's start values (a build input at the chain's
 start: :func:`harnesspipe.stages.chain_settings.build_start`) and the paper's Table 2.  The normalised sensitivity of a window is
@@ -36,15 +36,17 @@ from benchlib import hifi_run, section_tail, write_section
 HEADING = "## Hi-fi sensitivity screen"
 STEP = 0.25                    # relative step of an interface input
 ABSOLUTE = {"wire_fill": 0.5, "tape_tension": 2.0,      # defaults 0: absolute steps (fill, N)
+            "end_tape_binds": 1.0,                         # 0 -> 1: every wire bound, not only those touched
             "tube_closure": -0.5, "sleeve_closure": -0.5,  # defaults 1, the upper bound: down
             "pack_angle": 2.0}                             # deg, from the 1 deg seed turn
 RECORD = Path(__file__).resolve().parent / "sensitivity.json"
 COMMON = ("pack_angle", "wire_fill", "tape_tension", "mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d")
 CASES = {                      # calibration case -> (its windows, the inputs that can act on it)
     "cwb19_t2_closed": (("friction_window", "cohesive_window"),
-                        ("end_tape_layers", "closed_tube.pitch") + COMMON),
+                        ("end_tape_binds", "end_tape_layers", "closed_tube.pitch") + COMMON),
     "cwb19_t2_open_halflap": (("friction_window", "cohesive_window"),
-                              ("end_tape_layers", "tube_closure", "open_tube.pitch") + COMMON),
+                              ("end_tape_binds", "end_tape_layers", "tube_closure", "open_tube.pitch")
+                              + COMMON),
     "cwb19_t2_fabric": (("fabric_window",),
                         ("fabric_end_tape_layers", "sleeve_closure") + COMMON + ("E2_over_E1",)),
 }
@@ -113,7 +115,8 @@ def main() -> None:
 `bench/bench_sensitivity.py --profile {args.profile}`: each input the chain could fit moved by
 +{100 * STEP:.0f} % ({step}) from the config's start values, the paper's Table 2 coverings; S
 = relative l2 change of the curve in the window / relative change of the input (absolute for
-wire_fill, per unit fill, tape_tension, per N, the closures, per unit closure, and pack_angle,
+wire_fill, per unit fill, tape_tension, per N, end_tape_binds, from 0 to 1, the closures, per unit
+closure, and pack_angle,
 per deg).  S below ~0.05
 means the window's curve barely sees the input.
 

@@ -185,6 +185,27 @@ def test_flat_screen_ends_nelder_mead_after_its_first_simplex(tmp_path):
     assert rejected.nfev > 4
 
 
+@pytest.mark.parametrize("errors, picked", [((10.0, 9.5), 1.0), ((10.0, 9.95), 0.0), ((10.0, 10.5), 0.0),
+                                            ((1e9, 12.0), 1.0), ((10.0, 1e9), 0.0)])
+def test_a_choice_takes_the_other_value_only_when_the_data_tell_it_better(tmp_path, errors, picked):
+    """Start 0 and the other value 1, tie 0.1: 1 wins only by more than the tie (0.5 better:
+    yes; 0.05 better, within the uncertainty of the measured mean: the start stays; worse: the
+    start stays); a rejected start (the penalty 1e9) gives way, a rejected other value never
+    wins.  Both values are logged, the start first, and a rerun on the log replays them."""
+    calls = []
+
+    def objective(x):
+        calls.append(float(x[0]))
+        return errors[int(x[0])]
+
+    log = tmp_path / "choice.h5"
+    res = hcal.choice_fit(objective, "binds", [0, 1], keep=0.0, tie=0.1, log_path=log, penalty=1e9)
+    assert calls == [0.0, 1.0] and list(res.trace["binds"]) == [0.0, 1.0]
+    assert res.x[0] == picked and res.fun == errors[int(picked)] and res.nfev == 2
+    again = hcal.choice_fit(objective, "binds", [0, 1], keep=0.0, tie=0.1, log_path=log, penalty=1e9)
+    assert calls == [0.0, 1.0] and again.x[0] == picked
+
+
 def _pick_of(trace, tie, names, penalty=np.inf):
     """The weighted mean of a trace's rows before the last (the pick's own evaluation)."""
     rows = trace.iloc[:-1]
@@ -690,7 +711,7 @@ def test_hifi_targets_resolve_and_run(project):
                                                                      *hifi_chain.BUILD]
     assert list(pd.read_csv(res / "crosscheck" / "table3.csv").columns) == ["case", "E", "sigma_y", "K", "n",
                                                                             "reference"]
-    for step in ("build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_build", "fabric"):
+    for step in ("binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_build", "fabric"):
         for name in ("fit.json", "curve.csv", "trace.h5", "rejected.jsonl", "fit.png"):
             assert (res / "chain" / step / name).exists()
         # the friction fits (window < 20 mm) end their runs 1 mm past it; the others go to 30

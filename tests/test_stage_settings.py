@@ -63,9 +63,14 @@ def test_chain_starts_with_the_build_state_and_carries_it():
     assert t["window"] == s["window"]
     # the same inputs named in both (the tension step's start is the build step's pick: one run)
     assert set(t["start"]) == set(s["start"]) and s["start"]["tape_tension"] == t["start"]["tape_tension"]
-    assert list(chain.STEPS)[:2] == ["build", "tension"] and chain.STEPS["tension"]["prior"] == ["build"]
-    assert all({"build", "tension"} <= set(step["prior"]) for name, step in chain.STEPS.items()
-               if name not in ("build", "tension"))
+    assert list(chain.STEPS)[:3] == ["binding", "build", "tension"]
+    assert chain.STEPS["tension"]["prior"] == ["binding", "build"]
+    assert all({"binding", "build", "tension"} <= set(step["prior"]) for name, step in chain.STEPS.items()
+               if name not in ("binding", "build", "tension"))
+    b = json.loads(chain.fit_settings(cfg, "binding"))
+    assert b["names"] == ["end_tape_binds"] and b["method"] == "choice" and b["bounds"] is None
+    assert b["choices"] == [0, 1] and b["start"]["end_tape_binds"] == 0.0
+    assert b["cases"] == s["cases"] and b["window"] == s["window"] and set(b["start"]) == set(s["start"])
 
 
 def test_chain_fits_at_the_chain_profile_and_virtual_tests_at_the_run_profile():

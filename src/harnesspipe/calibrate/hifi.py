@@ -203,6 +203,31 @@ def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, ke
                      converged=converged, message=message, trace=log.frame())
 
 
+def choice_fit(objective, name: str, choices, *, keep: float, tie: float, log_path=None,
+               key="", penalty: float = np.inf) -> FitResult:
+    """The best of a few discrete values of one parameter (a build option, e.g. which wires
+    the end bands bind), every evaluation logged (and replayed): the start ``keep`` first,
+    then the other ``choices`` in order.  The lowest error replaces the start only when it
+    beats the start's by at least ``tie`` (the l2 standard error of the measured mean over the
+    window, :func:`flat_screen`'s floor): a difference within the uncertainty of the data
+    keeps the start, so the pick never hinges on a run's last bits.  A rejected run (error
+    >= ``penalty``) is never picked."""
+    log = EvaluationLog(log_path, [name], key)
+    values = [float(keep)] + [float(c) for c in choices if float(c) != float(keep)]
+    errors = [logged_call(log, objective, np.array([c], dtype=float)) for c in values]
+    best = int(np.argmin(errors))
+    told = errors[best] < penalty and (errors[0] >= penalty or errors[best] <= errors[0] - tie)
+    pick = best if told else 0
+    listed = ", ".join(f"{v:g}: {e:.4g} N" for v, e in zip(values, errors))
+    how = (f"{name} {values[pick]:g} beats the start by more than the standard error of the "
+           f"measured mean ({tie:.3g} N)" if told and pick != 0 else
+           f"the start {values[0]:g} kept: no other value beats it by the standard error of the "
+           f"measured mean ({tie:.3g} N)")
+    return FitResult(names=[name], x=np.array([values[pick]]), fun=float(errors[pick]),
+                     nfev=len(log.rows), converged=True, message=f"errors {listed}; {how}",
+                     trace=log.frame())
+
+
 def simplex_fit(objective, x0: dict, *, xatol: float, fatol: float, maxfev: int, log_path=None,
                 key="", stop=None, keep_start: bool = False, tie: float = 0.0,
                 penalty: float = np.inf) -> FitResult:

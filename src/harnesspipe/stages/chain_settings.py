@@ -1,10 +1,11 @@
 """The hi-fi calibration chain of Sec. 4.2 and the settings its rules pass to the stages.
 
 The chain in order: each step fixes what the earlier steps fitted (``prior``).  It starts
-with the specimen's build state that the sensitivity screen shows the curves depend on (the
-end bands' wraps, ``build``, then the tape's wrapping tension, ``tension``: two bounded
-searches in turn, each on the whole test of both tube CWBs; bench/RESULTS.md "Hi-fi
-sensitivity screen"), then the paper's steps; before the paper's fabric step, the fabric
+with the specimen's build state that the sensitivity screen shows the curves depend on
+(which wires the end bands bind, ``binding``, a pick between its two values; the end bands'
+wraps, ``build``, then the tape's wrapping tension, ``tension``: two bounded searches in
+turn; each on the whole test of both tube CWBs; bench/RESULTS.md "Hi-fi sensitivity
+screen"), then the paper's steps; before the paper's fabric step, the fabric
 CWB's own end bands (``fabric_build``: its tape is only at the ends, and the tube CWBs' fitted
 bands hold its curled sleeve too stiffly; bench/RESULTS.md "The fabric sleeve curled onto its
 bundle").  ``cores``:
@@ -22,33 +23,38 @@ from __future__ import annotations
 import json
 
 STEPS = {
+    "binding": {"names": ["end_tape_binds"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
+                "window": "build_window", "method": "choice", "choices": "binds_choices",
+                "prior": [], "cores": 2},
     "build": {"names": ["end_tape_layers"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
               "window": "build_window", "method": "bounded", "bounds": "layers_bounds",
-              "prior": [], "cores": 2},
+              "prior": ["binding"], "cores": 2},
     "tension": {"names": ["tape_tension"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
                 "window": "build_window", "method": "bounded", "bounds": "tension_bounds",
-                "prior": ["build"], "cores": 2},
+                "prior": ["binding", "build"], "cores": 2},
     "mu_rtb": {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": "friction_window",
-               "method": "bounded", "bounds": "mu_bounds", "prior": ["build", "tension"],
+               "method": "bounded", "bounds": "mu_bounds", "prior": ["binding", "build", "tension"],
                "cores": 2},
     "mu_rtp": {"names": ["mu_rtp"], "cases": ["cwb19_t2_open_halflap"],
                "window": "friction_window", "method": "bounded", "bounds": "mu_bounds",
-               "prior": ["build", "tension", "mu_rtb"], "cores": 2},
+               "prior": ["binding", "build", "tension", "mu_rtb"], "cores": 2},
     "cohesive": {"names": ["delta0", "delta_f", "alpha_d"],
                  "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"], "window": "cohesive_window",
-                 "method": "simplex", "prior": ["build", "tension", "mu_rtb", "mu_rtp"], "cores": 2},
+                 "method": "simplex", "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp"],
+                 "cores": 2},
     "fabric_build": {"names": ["fabric_end_tape_layers"], "cases": ["cwb19_t2_fabric"],
                      "window": "fabric_window", "method": "bounded", "bounds": "layers_bounds",
-                     "prior": ["build", "tension", "mu_rtb", "mu_rtp", "cohesive"], "cores": 1},
+                     "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive"], "cores": 1},
     "fabric": {"names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": "fabric_window",
                "method": "bounded", "bounds": "E2_bounds",
-               "prior": ["build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_build"], "cores": 1},
+               "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_build"],
+               "cores": 1},
 }
 VALIDATION = ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric")   # Sec. 4.2: predicted, no refit
 CALIBRATED = sorted({c for s in STEPS.values() for c in s["cases"]})
-BUILD = ("end_tape_layers", "tape_tension", "fabric_end_tape_layers")   # build-state inputs the chain fits (config hifi.build)
+BUILD = ("end_tape_binds", "end_tape_layers", "tape_tension", "fabric_end_tape_layers")   # build-state inputs the chain fits (config hifi.build)
 WINDOWS = ("build_window", "friction_window", "cohesive_window", "fabric_window",
-           "layers_bounds", "tension_bounds", "mu_bounds", "E2_bounds")
+           "layers_bounds", "tension_bounds", "mu_bounds", "E2_bounds", "binds_choices")
 
 
 def check_windows(config: dict) -> None:
@@ -185,6 +191,7 @@ def fit_settings(config: dict, step: str) -> str:
     resolution = config["profiles"][profile]
     s = STEPS[step]
     bounded = s["method"] == "bounded"
+    choice = s["method"] == "choice"
     fabric = any(is_fabric(config, c) for c in s["cases"])
     start = {k: v for k, v in config["hifi"]["parameters"].items() if k != "E2_over_E1" or fabric}
     # every build input a run of these cases reads, at its start value: a run's identity then
@@ -194,8 +201,9 @@ def fit_settings(config: dict, step: str) -> str:
     return json.dumps({
         "names": s["names"], "cases": s["cases"], "window": window, "method": s["method"],
         "bounds": pipe[s["bounds"]] if bounded else None,
+        "choices": pipe[s["choices"]] if choice else None,
         "xatol": pipe["bounded_xatol"] if bounded else pipe["simplex"]["xatol"],
-        "fatol": None if bounded else pipe["simplex"]["fatol"],
+        "fatol": None if bounded or choice else pipe["simplex"]["fatol"],
         "maxfev": budget(config)["bounded_maxfev" if bounded else "simplex_maxfev"],
         "flat_factor": pipe["flat_factor"],
         "start": start,

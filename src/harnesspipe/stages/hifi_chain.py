@@ -297,7 +297,8 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
         parameters={k: best[k] for k in names}, error_l2=res.fun, error_rel=res.fun / max(norm, 1e-300),
         nfev=res.nfev, converged=res.converged, wall_s=time.perf_counter() - t0, curve=curve,
         extra={"role": "calibration", "method": settings["method"], "cases": cases, "window": list(window),
-               "bounds": settings.get("bounds"), "interface": {**NEUTRAL, **best}, "priors": prior_ids,
+               "bounds": settings.get("bounds"), "choices": settings.get("choices"),
+               "interface": {**NEUTRAL, **best}, "priors": prior_ids,
                "per_case": per_case, "message": res.message,
                "hifi_runs": int(len(trace) * len(cases) + reruns),   # upper bound: a rejection stops early
                "hifi_runs_this_process": int(objective.n_runs + reruns - reused),
@@ -375,7 +376,8 @@ def _mean_uncertainty(refs: dict, window) -> float:
 
 
 def _search(step, settings, objective, names, fixed, live, key, floor):
-    """The bounded search (one parameter) or Nelder-Mead (several) of a fit step, with the
+    """The bounded search (one parameter), Nelder-Mead (several) or the pick among a few
+    values (``choice``: :func:`hcal.choice_fit`, the same floor) of a fit step, with the
     identifiability screen :func:`hcal.flat_screen` at ``floor`` x ``flat_factor`` over the
     start and the first points; a search the screen ends keeps the start values (``fixed``),
     whatever its first points gave; one that runs its course rests at the mean of its
@@ -398,7 +400,12 @@ def _search(step, settings, objective, names, fixed, live, key, floor):
                                 fatol=settings["fatol"], maxfev=settings["maxfev"], log_path=log, key=key,
                                 stop=hcal.flat_screen(len(names) + 1, floor, objective.penalty),
                                 keep_start=True, tie=floor, penalty=objective.penalty)
-    raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex")
+    if settings["method"] == "choice":
+        if len(names) != 1:
+            raise ConfigError(f"hifi fit {step}: a choice picks one parameter, not {names}")
+        return hcal.choice_fit(objective, names[0], settings["choices"], keep=float(fixed[names[0]]),
+                               tie=floor, log_path=log, key=key, penalty=objective.penalty)
+    raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex|choice")
 
 
 ONSET_FRACTION = 0.5   # ties below this fraction of delta0 at the start: cohesion is inert
