@@ -22,6 +22,7 @@ import pytest
 
 from conftest import copy_project, job_stats
 from harnesspipe.calibrate import hifi as hcal
+from harnesspipe.config import load as load_config
 from harnesspipe.stages import hifi_chain
 from harnesspipe.stages.chain_settings import STEPS
 
@@ -204,6 +205,20 @@ def test_a_choice_takes_the_other_value_only_when_the_data_tell_it_better(tmp_pa
     assert res.x[0] == picked and res.fun == errors[int(picked)] and res.nfev == 2
     again = hcal.choice_fit(objective, "binds", [0, 1], keep=0.0, tie=0.1, log_path=log, penalty=1e9)
     assert calls == [0.0, 1.0] and again.x[0] == picked
+
+
+def test_the_report_gives_a_choice_step_its_values_errors_and_why():
+    """A choice step's block names the values it chose among and says why it kept or
+    replaced the start, not a search interval or a convergence status."""
+    from harnesspipe.report.html import _step_text
+    res = hcal.choice_fit(lambda x: (5.1, 3.2)[int(x[0])], "end_tape_binds", [0, 1], keep=0.0, tie=0.4)
+    fit = {"item": "binding", "method": "choice", "cases": ["cwb19_t2_closed"], "window": [0, 30],
+           "error_l2": res.fun, "error_rel": 0.1, "nfev": res.nfev, "converged": res.converged,
+           "message": res.message, "parameters": res.params(), "choices": [0, 1], "bounds": None}
+    text = _step_text(fit, {}, load_config())
+    assert "errors 0: 5.1 N, 1: 3.2 N; end_tape_binds 1 beats the start by more than the standard " \
+           "error of the measured mean (0.4 N)." in text
+    assert "<td>search interval</td><td>one of [0, 1]</td>" in text and "did not converge" not in text
 
 
 def _pick_of(trace, tie, names, penalty=np.inf):

@@ -727,6 +727,10 @@ def _step_text(fit: dict, paper: dict, cfg: dict) -> str:
     if "not identifiable" in message:
         status = f' <span class="bad">{html.escape(message)}.</span>'
     status += _pick_words(message)
+    if fit.get("method") == "choice":            # the pick between a few values: its errors and why
+        status = f" {html.escape(message)}."
+    searched = (str(fit["bounds"]) if fit.get("bounds") else
+                f"one of {fit['choices']}" if fit.get("choices") else "")
     cases = "; ".join(labelled(c, cfg) for c in fit.get("cases", []))
     text = (f"<h3>Calibration step {html.escape(fit['item'])}</h3><p>{html.escape(fit.get('method', ''))} "
             f"on {html.escape(cases)}, deflection window "
@@ -735,8 +739,7 @@ def _step_text(fit: dict, paper: dict, cfg: dict) -> str:
             f"{fit.get('rejected', 0)} rejected, "
             f"{fit.get('hifi_wall_s', 0.0) / 60:.1f} min of hi-fi runs.{status}</p>"
             + _table(["", *fit["parameters"]], [["fitted", *fit["parameters"].values()],
-                                                 ["search interval", *[str(fit["bounds"]) if fit.get("bounds") else ""
-                                                                       for _ in fit["parameters"]]],
+                                                 ["search interval", *[searched for _ in fit["parameters"]]],
                                                  ["paper", *[paper.get("interface", {}).get(k, "not in the paper")
                                                              for k in fit["parameters"]]]]))
     if fit["item"] == "cohesive":
