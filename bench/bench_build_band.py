@@ -10,7 +10,8 @@ Table 3 cross-check (report/band.py).
 Each virtual test runs at the paper's Table 2 coverings and interface (config
 ``paper.table2``, ``paper.interface``: the inputs of the paper's own Table 3) with
 ``end_tape_layers`` and ``tape_tension`` at the bounds of ``hifi.pipeline.layers_bounds``
-and ``tension_bounds``; the rest of the build state at its default.  E_eff is eq. 13 on the run's curve (calibrate/eq13.effective_modulus,
+and ``tension_bounds``; the rest of the build state at its default (``end_tape_binds`` 0,
+which the chain's binding step may change).  E_eff is eq. 13 on the run's curve (calibrate/eq13.effective_modulus,
 the ROM stage's linear window).  Table 3's E falls inside the band when the build state the
 paper does not give could explain it.  Each run is one Numba thread; two run side by side.
 """

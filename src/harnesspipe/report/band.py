@@ -62,12 +62,13 @@ def section(record: dict | None, cfg: dict) -> str:
     head = "".join(f"<th>{html.escape(_corner(c))}</th>" for c in record["corners"])
     return ("<h3>Table 3's E against the band over the build state</h3><p class='note'>"
             "eq. 13 E_eff [MPa] of each case's virtual test at the paper's Table 2 and interface, "
-            "at the corners of the build inputs the chain fits (end_tape_layers: wraps of the end "
-            "bands; tape_tension: the tape's wrapping tension), which the paper does not give. "
+            "at the corners of the bounds the chain fits two build inputs within (end_tape_layers: "
+            "wraps of the end bands; tape_tension: the tape's wrapping tension), which the paper "
+            "does not give; the other build inputs at their defaults (end_tape_binds 0). "
             f"Table 3's E lies inside the band for {inside} of {len(record['rows'])} cases: where it "
             "lies outside, no build state between these bounds explains it. Recorded by "
             f"bench/bench_build_band.py at commit {html.escape(record['commit'])} on "
             f"{html.escape(record['date'])}, {html.escape(record['profile'])} profile; not rerun by "
             "this pipeline (twenty hi-fi runs), so a model changed since needs the bench rerun.</p>"
             f"<div class='wide'><table><tr><th>case</th>{head}<th>Table 3 E</th>"
-            "<th>Table 3's E</th></tr>" + "".join(rows) + "</table></div>")
+            "<th>where Table 3's E lies</th></tr>" + "".join(rows) + "</table></div>")
