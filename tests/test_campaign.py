@@ -198,8 +198,8 @@ def test_settings_follow_their_own_entry_only(cfg, demo, tmp_path):
     assert fitted[0] == str(tmp_path / "hifi" / "interface.csv")
     own = json.loads(S.hifi(grown, "w7_extra", cfg, res, fitted, covs))["model"]["hifi"]
     other = json.loads(S.hifi(grown, "w7_t2_closed", cfg, res, fitted, covs))["model"]["hifi"]
-    assert other["build"] == {"pack_angle": 1.0, "wire_fill": 0.0, "tube_closure": 1.0, "sleeve_closure": 1.0, "end_tape_layers": 3.5, "end_tape_binds": 0, "fabric_end_tape_layers": 1.5, "tape_tension": 0.0}
-    assert own["build"] == {"pack_angle": 1.0, "wire_fill": 0.5, "tube_closure": 1.0, "sleeve_closure": 1.0, "end_tape_layers": 3.5, "end_tape_binds": 0, "fabric_end_tape_layers": 1.5, "tape_tension": 0.0}
+    assert other["build"] == {"pack_angle": 1.0, "wire_fill": 0.0, "tube_closure": 1.0, "sleeve_closure": 1.0, "end_tape_layers": 3.5, "end_tape_binds": 0, "fabric_end_tape_binds": 0, "fabric_end_tape_layers": 1.5, "tape_tension": 0.0}
+    assert own["build"] == {"pack_angle": 1.0, "wire_fill": 0.5, "tube_closure": 1.0, "sleeve_closure": 1.0, "end_tape_layers": 3.5, "end_tape_binds": 0, "fabric_end_tape_binds": 0, "fabric_end_tape_layers": 1.5, "tape_tension": 0.0}
     assert other["parameters"]["mu_rtb"] == 0.25 and other["parameters"]["E2_over_E1"] == 1.0   # no fabric
     sleeve = _check(_with(demo, "w7_fabric", wires={"wire_type2": 7}, covering="fabric"), cfg)
     assert json.loads(S.hifi(sleeve, "w7_fabric", cfg, res, fitted, covs))["model"]["hifi"][

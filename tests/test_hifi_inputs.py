@@ -76,7 +76,7 @@ def test_build_state_keys_reach_the_run():
     with pytest.raises(ConfigError, match="end_tape_layers=0.5: expected a number of wraps"):
         inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "0.5"})
     assert inputs(cfg, "cwb19_t2_closed", {"end_tape_layers": "2.5"}).config["hifi"]["build"] == {
-        "pack_angle": 1.0, "wire_fill": 0.0, "tube_closure": 1.0, "sleeve_closure": 1.0, "end_tape_layers": 2.5, "end_tape_binds": 0, "fabric_end_tape_layers": None, "tape_tension": 0.0}
+        "pack_angle": 1.0, "wire_fill": 0.0, "tube_closure": 1.0, "sleeve_closure": 1.0, "end_tape_layers": 2.5, "end_tape_binds": 0, "fabric_end_tape_binds": 0, "fabric_end_tape_layers": None, "tape_tension": 0.0}
     assert inputs(cfg, "cwb19_t2_closed", {"pack_angle": "7.5"}).config["hifi"]["build"]["pack_angle"] == 7.5
     with pytest.raises(ConfigError, match="pack_angle=45: expected a turn of the wire pack"):
         inputs(cfg, "cwb19_t2_closed", {"pack_angle": "45"})

@@ -494,3 +494,20 @@ def test_end_tape_binds_every_wire_with_the_bands_bond_area_shared():
     assert max(np.linalg.norm(t["tie_arm"], axis=1).max() for t in extra) > 2.0   # across the bundle
     F, _ = separate_forces(every, np.zeros_like(every.mass), 1e-6)
     assert np.abs(F[5]).max() < 1e-9
+
+
+def test_a_fabric_cwbs_end_bands_bind_by_their_own_key():
+    """``fabric_end_tape_binds`` (0 by default) decides a fabric-sleeved CWB's end bands, not
+    the tube CWBs' ``end_tape_binds``; null takes ``end_tape_binds``."""
+    from harnesspipe.models import hifi, hifi_mesh as hm
+    from harnesspipe.stages.hifi import inputs
+
+    def tied(sets):
+        inp = inputs(load(overrides={"profile": "quick"}), "cwb19_t2_fabric", sets)
+        return len(_tied_wires(hifi.HifiSystem(hm.build_mesh(inp.case, inp.config, inp.resolution), inp), 1.0))
+
+    assert tied({"end_tape_binds": "1"}) < 19
+    assert tied({"end_tape_binds": "0", "fabric_end_tape_binds": "1"}) == 19
+    cfg = load(overrides={"profile": "quick", "hifi": {"build": {"fabric_end_tape_binds": None}}})
+    inp = inputs(cfg, "cwb19_t2_fabric", {"end_tape_binds": "1"})
+    assert len(_tied_wires(hifi.HifiSystem(hm.build_mesh(inp.case, inp.config, inp.resolution), inp), 1.0)) == 19

@@ -44,7 +44,8 @@ RULES = {
     "sleeve_closure": ("a fraction", 0.0, True, 1.0, False),
     "end_tape_layers": ("a number of wraps of tape", 1.0, True, 10.0, False),
     "fabric_end_tape_layers": ("a number of wraps of tape", 1.0, True, 10.0, False),
-    "end_tape_binds": ("0 (the wires the end band touches) or 1 (every wire under it)", 0.0, True, 1.0, True),
+    **{k: ("0 (the wires the end band touches) or 1 (every wire under it)", 0.0, True, 1.0, True)
+       for k in ("end_tape_binds", "fabric_end_tape_binds")},
     "tape_tension": ("a wrapping tension [N]", 0.0, True, None, False),
     "pitch": ("a corrugation pitch [mm]", 0.0, False, None, False),
 }

@@ -34,7 +34,7 @@ from harnesspipe.fe.materials.plane_stress import fabric_shear_modulus
 from harnesspipe.fe.rotation import move_nodes
 from harnesspipe.fe.solvers.central_difference import smooth_step
 from harnesspipe.models import hifi_mesh as hm
-from harnesspipe.models.hifi_mesh_parts import tape_material
+from harnesspipe.models.hifi_mesh_parts import end_band_value, tape_material
 from harnesspipe.models.hifi_parts import Wires
 from harnesspipe.models.hifi_ties import BundleTies
 from harnesspipe.fe.elements.shell_bt_element import MAT_TUBE
@@ -92,10 +92,8 @@ class HifiInputs:
 
 def end_band_layers(build: dict, fabric: bool) -> float:
     """Wraps of tape in each end band (the band's stiffness thickness over one layer's):
-    ``fabric_end_tape_layers`` on a fabric-sleeved CWB when it is set, else
-    ``end_tape_layers`` (config ``hifi.build``)."""
-    own = build.get("fabric_end_tape_layers") if fabric else None
-    return float(build["end_tape_layers"] if own is None else own)
+    :func:`harnesspipe.models.hifi_mesh_parts.end_band_value` of ``end_tape_layers``."""
+    return end_band_value(build, fabric, "end_tape_layers")
 
 
 def shell_materials(mesh, inp: HifiInputs):

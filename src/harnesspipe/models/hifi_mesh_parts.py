@@ -407,6 +407,14 @@ def fabric_shell(cov: Covering, xc: np.ndarray, n_circ: int) -> ShellPart:
 
 # ---------------------------------------------------------------------------- tapes
 
+def end_band_value(build: dict, fabric: bool, name: str) -> float:
+    """A build value of the end bands (config ``hifi.build``), ``name`` (``end_tape_layers``,
+    ``end_tape_binds``): on a fabric-sleeved CWB its own ``fabric_<name>`` when that is set
+    (its tape is only at the ends, Sec. 4.2.2), else ``name``."""
+    own = build.get(f"fabric_{name}") if fabric else None
+    return float(build[name] if own is None else own)
+
+
 def end_band_profile(sample: Sample, n_end: int, stepped: bool):
     """Stations of an end band as distances s from the centre, from the sample end
     L_s/2 to L_s/2 - a, and whether each lies on the covering.  ``stepped``: over the bare

@@ -11,7 +11,7 @@ from harnesspipe.fe.assembly.lanes import stack_groups
 from harnesspipe.fe.contact.tie_targets import make_ties
 from harnesspipe.fe.elements.shell_element import XI_NODE
 from harnesspipe.models import hifi_mesh as hm
-from harnesspipe.models.hifi_mesh_parts import tape_material
+from harnesspipe.models.hifi_mesh_parts import end_band_value, tape_material
 
 TIE_TOL = {hm.TIE_COVERING: 0.3, hm.TIE_WIRES: 0.5, hm.TIE_TAPE: 0.3}   # mm: facet chord sag / hexagonal bundle under a round band
 I8, F8 = np.int64, float
@@ -73,7 +73,8 @@ class BundleTies:
             if ties["tie_node"].size:
                 ties["kind"] = kind
                 self.ties.append(ties)
-        if self.inp.config["hifi"]["build"].get("end_tape_binds", 0.0) >= 1.0:
+        fabric = bool((mesh.shell_part == hm.PART_FABRIC).any())
+        if end_band_value(self.inp.config["hifi"]["build"], fabric, "end_tape_binds") >= 1.0:
             self._bind_every_wire(tape_t)
         if not itf["delta_f"] > itf["delta0"]:
             raise ValueError(f"cohesive: delta_f = {itf['delta_f']} must exceed delta0 = {itf['delta0']}")

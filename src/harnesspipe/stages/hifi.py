@@ -23,7 +23,7 @@ INTERFACE_KEYS = ("mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E
 EXPLICIT_KEYS = ("t_total", "rate_ramp", "f_m", "safety", "mass_damping", "penalty", "penalty_layers",
                  "search_margin", "tie_damping", "stop_deflection")
 BUILD_KEYS = ("pack_angle", "wire_fill", "tube_closure", "sleeve_closure", "end_tape_layers", "end_tape_binds",
-              "fabric_end_tape_layers",
+              "fabric_end_tape_layers", "fabric_end_tape_binds",
               "tape_tension")    # the specimen's build state (config hifi.build)
 COVERINGS = ("closed_tube", "open_tube", "fabric_tube")
 TUBES = ("closed_tube", "open_tube")             # their corrugation pitch is a --set key too
