@@ -36,7 +36,7 @@ from benchlib import hifi_run, section_tail, write_section
 HEADING = "## Hi-fi sensitivity screen"
 STEP = 0.25                    # relative step of an interface input
 ABSOLUTE = {"wire_fill": 0.5, "tape_tension": 2.0,      # defaults 0: absolute steps (fill, N)
-            "end_tape_binds": 1.0,                         # 0 -> 1: every wire bound, not only those touched
+            "end_tape_binds": 1.0, "fabric_end_tape_binds": 1.0,   # 0 -> 1: every wire bound, not only those touched
             "tube_closure": -0.5, "sleeve_closure": -0.5,  # defaults 1, the upper bound: down
             "pack_angle": 2.0}                             # deg, from the 1 deg seed turn
 RECORD = Path(__file__).resolve().parent / "sensitivity.json"
@@ -48,7 +48,8 @@ CASES = {                      # calibration case -> (its windows, the inputs th
                               ("end_tape_binds", "end_tape_layers", "tube_closure", "open_tube.pitch")
                               + COMMON),
     "cwb19_t2_fabric": (("fabric_window",),
-                        ("fabric_end_tape_layers", "sleeve_closure") + COMMON + ("E2_over_E1",)),
+                        ("fabric_end_tape_binds", "fabric_end_tape_layers", "sleeve_closure") + COMMON
+                        + ("E2_over_E1",)),
 }
 
 
@@ -81,34 +82,61 @@ def window_sensitivity(u, F0, F1, window, denominator) -> float:
     return float(np.linalg.norm(F1[sel] - F0[sel]) / np.linalg.norm(F0[sel]) / denominator)
 
 
+def _selected(only: list[str] | None) -> list[tuple[str, str]]:
+    """(case, input) pairs to run: every pair of CASES, or those ``only`` names as
+    ``case/input`` (SystemExit naming a pair CASES does not have)."""
+    pairs = [(c, n) for c, (_, names) in CASES.items() for n in names]
+    if only is None:
+        return pairs
+    wanted = [tuple(o.split("/", 1)) for o in only]
+    unknown = [o for o, w in zip(only, wanted) if w not in pairs]
+    if unknown:
+        raise SystemExit(f"--only {unknown}: expected case/input pairs of CASES, e.g. {'/'.join(pairs[0])}")
+    return wanted
+
+
+def _merged(rows: list[dict], only: bool) -> list[dict]:
+    """The record's rows: the new ones, with ``only`` also the recorded rows they do not
+    replace, in CASES order."""
+    old = json.loads(RECORD.read_text())["rows"] if only and RECORD.exists() else []
+    by_pair = {(r["case"], r["input"]): r for r in old + rows}
+    order = [(c, n) for c, (_, names) in CASES.items() for n in names]
+    return [by_pair[p] for p in order if p in by_pair]
+
+
 def main() -> None:
     from harnesspipe.config import load
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--profile", default="quick")
+    ap.add_argument("--only", nargs="+", metavar="CASE/INPUT",
+                    help="run these pairs (and their cases' base runs) alone and merge them into "
+                         "the recorded screen; its other rows stay as recorded")
     args = ap.parse_args()
     cfg = load(overrides={"profile": args.profile})
     pipe = cfg["hifi"]["pipeline"]
-    jobs = [(c, None, args.profile) for c in CASES]
-    jobs += [(c, name, args.profile) for c, (_, names) in CASES.items() for name in names]
+    pairs = _selected(args.only)
+    if args.only and json.loads(RECORD.read_text())["profile"] != args.profile:
+        raise SystemExit(f"--only at {args.profile}: {RECORD.name} was recorded at another profile")
+    jobs = [(c, None, args.profile) for c in dict.fromkeys(c for c, _ in pairs)]
+    jobs += [(c, name, args.profile) for c, name in pairs]
     with Pool(2) as pool:
         results = pool.map(_run, jobs, chunksize=1)
     curves = {(c, n): (u, F, s) for c, n, u, F, s in results}
     u = np.linspace(0.0, cfg["three_point"]["deflection"], 301)
-    rows, table, record = [], {}, []
-    for case, (windows, names) in CASES.items():
+    table, new_rows = {}, []
+    for case, name in pairs:
+        windows = CASES[case][0]
         u0, F0, _ = curves[(case, None)]
-        F0 = np.interp(u, u0, F0)
-        for name in names:
-            u1, F1, s = curves[(case, name)]
-            F1 = np.interp(u, u1, F1)
-            den = abs(ABSOLUTE.get(name, STEP))
-            S = {w: window_sensitivity(u, F0, F1, pipe[w], den) for w in windows}
-            table[f"{case}/{name}"] = S
-            record.append({"case": case, "input": name,
-                           "S": {w.replace("_window", ""): round(v, 4) for w, v in S.items()}})
-            cells = " | ".join(f"{w.replace('_window', '')} {S[w]:.3f}" for w in windows)
-            rows.append(f"| {case} | {name} | {cells} |")
-            print(rows[-1], flush=True)
+        u1, F1, _ = curves[(case, name)]
+        den = abs(ABSOLUTE.get(name, STEP))
+        S = {w: window_sensitivity(u, np.interp(u, u0, F0), np.interp(u, u1, F1), pipe[w], den)
+             for w in windows}
+        table[f"{case}/{name}"] = S
+        new_rows.append({"case": case, "input": name,
+                         "S": {w.replace("_window", ""): round(v, 4) for w, v in S.items()}})
+    record = _merged(new_rows, args.only is not None)
+    rows = [f"| {r['case']} | {r['input']} | " + " | ".join(f"{w} {v:.3f}" for w, v in r["S"].items())
+            + " |" for r in record]
     step = ", ".join(f"{k} {v:+}" for k, v in ABSOLUTE.items())
     text = f"""{HEADING}
 
@@ -125,18 +153,27 @@ means the window's curve barely sees the input.
 """ + "\n".join(rows) + "\n"
     tail = section_tail(HEADING)          # the notes by hand stay
     write_section(HEADING, text + ("\n" + tail + "\n" if tail else ""))
-    write_record(args.profile, step, record)
+    write_record(args.profile, step, record, added=new_rows if args.only else None)
     print(json.dumps(table, indent=1))
 
 
-def write_record(profile: str, step: str, rows: list[dict]) -> None:
+def write_record(profile: str, step: str, rows: list[dict], added: list[dict] | None) -> None:
     """bench/sensitivity.json: the screen's S per case, input and window (``rows``), with what
-    it was run on, for the pipeline's report."""
+    it was run on, for the pipeline's report.  ``added``: rows of an ``--only`` run, which
+    keep the recorded commit and date and name their own in ``added``."""
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True, cwd=RECORD.parent).stdout.strip()
-    RECORD.write_text(json.dumps({
-        "profile": profile, "commit": commit, "date": datetime.date.today().isoformat(),
-        "step": f"+{100 * STEP:.0f} % ({step})", "rows": rows}, indent=1) + "\n")
+    today = datetime.date.today().isoformat()
+    head = {"profile": profile, "commit": commit, "date": today}
+    extra = []
+    if added is not None:
+        old = json.loads(RECORD.read_text())
+        head = {k: old[k] for k in head}
+        replaced = {(r["case"], r["input"]) for r in added}
+        extra = [a for a in old.get("added", []) if (a["case"], a["input"]) not in replaced]
+        extra += [{"case": r["case"], "input": r["input"], "commit": commit, "date": today} for r in added]
+    RECORD.write_text(json.dumps({**head, "step": f"+{100 * STEP:.0f} % ({step})", "rows": rows,
+                                  **({"added": extra} if extra else {})}, indent=1) + "\n")
 
 
 if __name__ == "__main__":

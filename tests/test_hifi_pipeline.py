@@ -726,7 +726,8 @@ def test_hifi_targets_resolve_and_run(project):
                                                                      *hifi_chain.BUILD]
     assert list(pd.read_csv(res / "crosscheck" / "table3.csv").columns) == ["case", "E", "sigma_y", "K", "n",
                                                                             "reference"]
-    for step in ("binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_build", "fabric"):
+    for step in ("binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_binding",
+                 "fabric_build", "fabric"):
         for name in ("fit.json", "curve.csv", "trace.h5", "rejected.jsonl", "fit.png"):
             assert (res / "chain" / step / name).exists()
         # the friction fits (window < 20 mm) end their runs 1 mm past it; the others go to 30
@@ -742,7 +743,7 @@ def test_hifi_targets_resolve_and_run(project):
 
 @pytest.mark.parametrize("overlay, crosscheck, steps", [
     ("coverings:\n  fabric_tube:\n    nu12: 0.3\n", True,           # the fabric's Poisson ratio (eq. 12):
-     {"fabric_build", "fabric"}),                                     # every fit on the fabric CWB
+     {"fabric_binding", "fabric_build", "fabric"}),                   # every fit on the fabric CWB
     ("hifi:\n  pipeline:\n    E2_bounds: [0.3, 1.1]\n", False, {"fabric"}),   # read by the E2/E1 fit only
 ])
 def test_fabric_parameter_reruns_only_fabric_fits(project, overlay, crosscheck, steps):

@@ -32,6 +32,14 @@ def test_the_record_is_shown_with_the_step_that_fits_each_input(tmp_path):
     assert screen.section(None) == "" and screen.read_record(tmp_path / "none.json") is None
 
 
+def test_a_row_run_later_alone_names_its_own_commit(tmp_path):
+    """bench_sensitivity.py --only merges a row into the record; the report says when it was run."""
+    added = [{"case": "cwb19_t2_fabric", "input": "wire_fill", "commit": "def5678", "date": "2026-12-02"}]
+    text = screen.section(screen.read_record(_record(tmp_path, added=added)))
+    assert ("commit abc1234 on 2026-11-29, quick profile; the row cwb19_t2_fabric / wire_fill "
+            "added at commit def5678 on 2026-12-02;") in text
+
+
 def test_a_broken_record_is_refused_naming_the_file_and_the_field(tmp_path):
     path = _record(tmp_path)
     data = json.loads(path.read_text())

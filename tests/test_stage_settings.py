@@ -112,3 +112,22 @@ def test_fabric_cwb_fits_its_own_end_bands_before_its_orthotropy():
     assert chain.STEPS["fabric"]["prior"][-1] == "fabric_build"
     own = hp_config.load(overrides={"hifi": {"build": {"fabric_end_tape_layers": 2.0}}})
     assert json.loads(chain.fit_settings(own, "fabric_build"))["start"]["fabric_end_tape_layers"] == 2.0
+
+
+def test_fabric_cwb_picks_which_wires_its_end_bands_bind_on_its_own_case():
+    """fabric_binding picks fabric_end_tape_binds from binds_choices on the t2 fabric CWB
+    alone, from its config start 0 (not the tube CWBs' pick: no prior step fits it; null
+    starts at end_tape_binds' config value); the fabric CWB's later steps take its pick."""
+    cfg = hp_config.load()
+    s = json.loads(chain.fit_settings(cfg, "fabric_binding"))
+    assert s["names"] == ["fabric_end_tape_binds"] and s["cases"] == ["cwb19_t2_fabric"]
+    assert s["method"] == "choice" and s["choices"] == cfg["hifi"]["pipeline"]["binds_choices"]
+    assert s["start"]["fabric_end_tape_binds"] == 0.0 and s["window"] == cfg["hifi"]["pipeline"]["fabric_window"]
+    assert s["start"]["end_tape_binds"] == 0.0          # the tube CWBs' pick comes as a prior, not a start
+    assert not any("fabric_end_tape_binds" in chain.STEPS[p]["names"] for p in chain.STEPS["fabric_binding"]["prior"])
+    assert "fabric_binding" in chain.STEPS["fabric_build"]["prior"]
+    assert "fabric_binding" in chain.STEPS["fabric"]["prior"]
+    tube = json.loads(chain.fit_settings(cfg, "binding"))
+    assert "fabric_end_tape_binds" not in tube["start"]      # a tube CWB's run does not read it
+    own = hp_config.load(overrides={"hifi": {"build": {"fabric_end_tape_binds": None, "end_tape_binds": 1}}})
+    assert json.loads(chain.fit_settings(own, "fabric_binding"))["start"]["fabric_end_tape_binds"] == 1.0

@@ -220,7 +220,7 @@ def choice_fit(objective, name: str, choices, *, keep: float, tie: float, log_pa
     pick = best if told else 0
     listed = ", ".join(f"{v:g}: {e:.4g} N" for v, e in zip(values, errors))
     how = (f"{name} {values[pick]:g} beats the start by more than the standard error of the "
-           f"measured mean ({tie:.3g} N)" if told and pick != 0 else
+           f"measured mean ({tie:.3g} N)" if pick != 0 else
            f"the start {values[0]:g} kept: no other value beats it by the standard error of the "
            f"measured mean ({tie:.3g} N)")
     return FitResult(names=[name], x=np.array([values[pick]]), fun=float(errors[pick]),

@@ -90,12 +90,6 @@ class HifiInputs:
     coverings: dict              # E, sigma_y, K, n per covering (tensile stage)
 
 
-def end_band_layers(build: dict, fabric: bool) -> float:
-    """Wraps of tape in each end band (the band's stiffness thickness over one layer's):
-    :func:`harnesspipe.models.hifi_mesh_parts.end_band_value` of ``end_tape_layers``."""
-    return end_band_value(build, fabric, "end_tape_layers")
-
-
 def shell_materials(mesh, inp: HifiInputs):
     """Per-element (mat row, stiffness thickness, density) of the shells (fe/shell_bt layout).
     The ridged tube is the isotropic J2 equivalent shell, or with ``wall_law: resultant``
@@ -119,7 +113,8 @@ def shell_materials(mesh, inp: HifiInputs):
     thick[sel] = tape["thickness"]
     rho[sel] = tape["rho"]
     ends = sel & np.isin(mesh.shell_group, (hm.GROUP_END_LEFT, hm.GROUP_END_RIGHT))
-    thick[ends] *= end_band_layers(cfg["hifi"]["build"], (mesh.shell_part == hm.PART_FABRIC).any())
+    fabric = (mesh.shell_part == hm.PART_FABRIC).any()
+    thick[ends] *= end_band_value(cfg["hifi"]["build"], fabric, "end_tape_layers")   # wraps of tape
     sel = mesh.shell_part == hm.PART_TUBE
     if sel.any():
         own = {k: inp.case[k] for k in ("d_i", "d_o") if k in inp.case}   # e.g. the 15 mm tube

@@ -97,6 +97,7 @@ class BundleTies:
         (the squeezed end moving as one); the node's bond area is shared among those wires,
         so their ties together are as stiff as one tie of the node, not as their number."""
         mesh = self.mesh
+        centre = mesh.wire_yz.mean(axis=0)
         for group in (hm.GROUP_END_LEFT, hm.GROUP_END_RIGHT):
             band = np.unique(self.sconn[mesh.shell_group == group])
             sel = (mesh.tie_target == hm.TIE_WIRES) & np.isin(mesh.tie_nodes, band)
@@ -106,7 +107,6 @@ class BundleTies:
             loose = [w for w in range(mesh.n_wires) if w not in held]
             if not nodes.size or not loose:
                 continue
-            centre = mesh.wire_yz.mean(axis=0)
             reach = 2.0 * float(np.max(np.linalg.norm(self.x[nodes, 1:3] - centre, axis=1)))
             for w in loose:
                 segs = np.flatnonzero(mesh.beam_wire == w)

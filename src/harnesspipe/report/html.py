@@ -691,7 +691,7 @@ def _interface_table(root: Path, fits: list[Path], cfg: dict) -> str:
             "those of a fabric-sleeved CWB, empty: end_tape_layers; tape_tension: the tape's "
             "wrapping tension, N; pack_angle: the wire pack turned about its axis, deg; wire_fill: "
             "the wires spread in the covering; end_tape_binds: 1 when the end bands bind every wire, "
-            "0 only those they touch; tube_closure: a slit "
+            "0 only those they touch; fabric_end_tape_binds: those of a fabric-sleeved CWB; tube_closure: a slit "
             "tube rolled onto its bundle; sleeve_closure: a fabric sleeve curled onto its bundle) "
             "is not in the paper; a build input without a calibrated "
             "value keeps its config value (initial guess)." + _chain_mesh_note(cfg) + "</p>"

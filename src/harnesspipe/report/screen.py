@@ -62,6 +62,13 @@ def _cell(S: float) -> str:
     return f"<span class='note'>{text}</span>" if S < BARELY else f"<b>{text}</b>"
 
 
+def _added(record: dict) -> str:
+    """Rows run later alone (``bench_sensitivity.py --only``), with their commit and date."""
+    return "".join(f"; the row {html.escape(a['case'])} / {html.escape(a['input'])} added at "
+                   f"commit {html.escape(a['commit'])} on {html.escape(a['date'])}"
+                   for a in record.get("added", []))
+
+
 def section(record: dict | None) -> str:
     """An <h3> block: the screen's table, or nothing when no record is given."""
     if record is None:
@@ -77,7 +84,7 @@ def section(record: dict | None) -> str:
             f"chain's start values; S below {BARELY} (grey) means the window's curve barely sees "
             "the input. Recorded by bench/bench_sensitivity.py at commit "
             f"{html.escape(record['commit'])} on {html.escape(record['date'])}, {html.escape(record['profile'])} "
-            "profile; not rerun by this pipeline (about thirty hi-fi runs), so a model changed "
-            "since then needs the bench rerun.</p><div class='wide'><table><tr><th>case</th>"
+            "profile" + _added(record) + "; not rerun by this pipeline (about thirty hi-fi runs), "
+            "so a model changed since then needs the bench rerun.</p><div class='wide'><table><tr><th>case</th>"
             "<th>input</th><th>S per window</th><th>fitted by</th></tr>"
             + "".join(rows) + "</table></div>")

@@ -6,9 +6,10 @@ with the specimen's build state that the sensitivity screen shows the curves dep
 wraps, ``build``, then the tape's wrapping tension, ``tension``: two bounded searches in
 turn; each on the whole test of both tube CWBs; bench/RESULTS.md "Hi-fi sensitivity
 screen"), then the paper's steps; before the paper's fabric step, the fabric
-CWB's own end bands (``fabric_build``: its tape is only at the ends, and the tube CWBs' fitted
-bands hold its curled sleeve too stiffly; bench/RESULTS.md "The fabric sleeve curled onto its
-bundle").  ``cores``:
+CWB's own end bands, which wires they bind (``fabric_binding``, a pick like ``binding``) and
+their wraps (``fabric_build``): its tape is only at the ends, and the tube CWBs' fitted
+bands hold its curled sleeve too stiffly (bench/RESULTS.md "The fabric sleeve curled onto its
+bundle", "Which wires the end bands bind").  ``cores``:
 the step's Snakemake threads.  Nothing else of the chain can run beside the friction and
 cohesive fits (every virtual test needs their interface), so they take both cores (one process
 per case, or one process with two Numba threads); the fabric fit takes one, and the virtual
@@ -42,17 +43,22 @@ STEPS = {
                  "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"], "window": "cohesive_window",
                  "method": "simplex", "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp"],
                  "cores": 2},
+    "fabric_binding": {"names": ["fabric_end_tape_binds"], "cases": ["cwb19_t2_fabric"],
+                       "window": "fabric_window", "method": "choice", "choices": "binds_choices",
+                       "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive"], "cores": 1},
     "fabric_build": {"names": ["fabric_end_tape_layers"], "cases": ["cwb19_t2_fabric"],
                      "window": "fabric_window", "method": "bounded", "bounds": "layers_bounds",
-                     "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive"], "cores": 1},
+                     "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive",
+                               "fabric_binding"], "cores": 1},
     "fabric": {"names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": "fabric_window",
                "method": "bounded", "bounds": "E2_bounds",
-               "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_build"],
-               "cores": 1},
+               "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_binding",
+                         "fabric_build"], "cores": 1},
 }
 VALIDATION = ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric")   # Sec. 4.2: predicted, no refit
 CALIBRATED = sorted({c for s in STEPS.values() for c in s["cases"]})
-BUILD = ("end_tape_binds", "end_tape_layers", "tape_tension", "fabric_end_tape_layers")   # build-state inputs the chain fits (config hifi.build)
+BUILD = ("end_tape_binds", "end_tape_layers", "tape_tension", "fabric_end_tape_binds",
+         "fabric_end_tape_layers")   # build-state inputs the chain fits (config hifi.build)
 WINDOWS = ("build_window", "friction_window", "cohesive_window", "fabric_window",
            "layers_bounds", "tension_bounds", "mu_bounds", "E2_bounds", "binds_choices")
 
@@ -174,12 +180,13 @@ def fit_stop(config: dict, window) -> dict:
 
 def build_start(config: dict, name: str) -> float:
     """Start value of a fitted build input: config ``hifi.build``; the fabric CWB's end bands
-    start as a fabric CWB's run reads them (:func:`harnesspipe.models.hifi_bundle.end_band_layers`:
-    ``end_tape_layers``' config value when null), not at the tube CWBs' fitted value."""
-    from harnesspipe.models.hifi_bundle import end_band_layers
+    (``fabric_<name>``) start as a fabric CWB's run reads them
+    (:func:`harnesspipe.models.hifi_mesh_parts.end_band_value`: ``<name>``'s config value when
+    null), not at the tube CWBs' fitted value."""
+    from harnesspipe.models.hifi_mesh_parts import end_band_value
     build = config["hifi"]["build"]
-    if name == "fabric_end_tape_layers":
-        return end_band_layers(build, fabric=True)
+    if name.startswith("fabric_"):
+        return end_band_value(build, True, name.removeprefix("fabric_"))
     return float(build[name])
 
 
@@ -196,7 +203,7 @@ def fit_settings(config: dict, step: str) -> str:
     start = {k: v for k, v in config["hifi"]["parameters"].items() if k != "E2_over_E1" or fabric}
     # every build input a run of these cases reads, at its start value: a run's identity then
     # does not depend on which step made it (the next step takes its start's run, hifi_chain.StoredRun)
-    start.update({k: build_start(config, k) for k in BUILD if k != "fabric_end_tape_layers" or fabric})
+    start.update({k: build_start(config, k) for k in BUILD if not k.startswith("fabric_") or fabric})
     window = pipe[s["window"]]
     return json.dumps({
         "names": s["names"], "cases": s["cases"], "window": window, "method": s["method"],
