@@ -12,7 +12,11 @@ feeder (Sec. 2.2, 4.1; pins of 5 mm along z, the tube along x), once with
   d_o/2 - t/2, wall t, the configured pitch; a crest at midspan) as Belytschko-Lin-Tsay
   shells of the Table 2 material (eq. 2, J2) and its thickness; and
 * ``wall="equivalent"``: the smooth shell at the mean radius with E_eq, t_eq and the fitted
-  plasticity, as the CWB model has it.
+  plasticity, as the CWB model has it by default (``wall_law: isotropic``); or
+* ``wall="resultant"``: the same smooth shell with the ridged wall's resultant law
+  (:func:`harnesspipe.models.tube_equivalent.wall_resultants`, the CWB model's ``wall_law:
+  resultant``): the cell's axial membrane laws, the section's hoop bending, the wall's own
+  soft bending along the axis.
 
 The test is symmetric about midspan (x = 0), and a closed tube's also about the loading plane
 (z = 0): the model is its quarter x >= 0, z >= 0 (one roller, half the feeder), or for a
@@ -35,15 +39,17 @@ import pandas as pd
 from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact, facets_cylinder_gaps
 from harnesspipe.fe.elements.shell_bt import (init_shell_state, shell_energies, shell_forces,
                                                shell_lumped_mass, shell_stable_step)
+from harnesspipe.fe.elements.shell_bt_element import MAT_TUBE
 from harnesspipe.fe.solvers.central_difference import DynamicsSettings, integrate, ramp_share
 from harnesspipe.models.hifi_parts import Pins
 from harnesspipe.models.tensile import TubeGeometry
-from harnesspipe.models.tube_equivalent import equivalent_shell
+from harnesspipe.models.tube_equivalent import equivalent_shell, wall_resultants, wall_row
 
 FAMILIES = ("internal", "pin_contact", "pin_friction")
 PIN_PATCHES = 8          # friction slots per pin (a resolved tube touches a pin on a few crests)
-WALLS = ("resolved", "equivalent")
-MESH = {"resolved": {"n_circ": 16, "per_pitch": 8}, "equivalent": {"n_circ": 16, "n_axial": 32}}
+WALLS = ("resolved", "equivalent", "resultant")
+MESH = {"resolved": {"n_circ": 16, "per_pitch": 8}, "equivalent": {"n_circ": 16, "n_axial": 32},
+        "resultant": {"n_circ": 16, "n_axial": 32}}
 RATE = 20.0              # mm/s of model time: KE/IE < 1 % of the resolved tube after the ramp
 DT_TARGET = 2e-6         # s: the density factor's target step (the resolved tube's ~55)
 
@@ -56,7 +62,7 @@ class TubeShells:
     conn: np.ndarray        # (n_el, 4)
     thick: np.ndarray       # (n_el,) stiffness thickness
     contact_t: np.ndarray   # (n_el,) thickness the pins see
-    mat: np.ndarray         # (n_el, 6) J2 rows (E, nu, sigma_y, K, n, 0)
+    mat: np.ndarray         # (n_el, 6) J2 rows (E, nu, sigma_y, K, n, 0), or tube-wall rows
     rho: np.ndarray         # (n_el,) density
     cut: bool               # slit along its length: the half model, else the quarter
 
@@ -114,6 +120,23 @@ def equivalent_tube(geometry: TubeGeometry, material: dict, length: float, n_cir
     return TubeShells(X, conn, np.full(n_el, eq["t"]), np.full(n_el, t_contact),
                       _row(eq["E"], eq["nu"], eq["sigma_y"], eq["K"], eq["n"], n_el),
                       np.full(n_el, eq["rho"]), cut)
+
+
+def resultant_tube(geometry: TubeGeometry, material: dict, length: float, n_circ: int,
+                   n_axial: int, cut: bool = False) -> TubeShells:
+    """The smooth shell of :func:`equivalent_tube` with the ridged wall's resultant law
+    (:func:`harnesspipe.models.tube_equivalent.wall_row`; thickness: the wall area per
+    unit length, which carries the mass)."""
+    eq = equivalent_shell(material["E"], material["sigma_y"], material["K"], material["n"], geometry,
+                          nu=material["nu"], rho=material["rho"])
+    w = wall_resultants(material["E"], material["sigma_y"], material["K"], material["n"], geometry,
+                        nu=material["nu"])
+    x = np.linspace(0.0, 0.5 * length, n_axial // 2 + 1)
+    X, conn = _tube_grid(x, np.full(x.size, eq["radius"]), n_circ, cut)
+    n_el = conn.shape[0]
+    t_contact = 0.5 * (geometry.d_outer - geometry.d_inner)
+    return TubeShells(X, conn, np.full(n_el, w["mass_thickness"]), np.full(n_el, t_contact),
+                      np.tile(wall_row(w, MAT_TUBE), (n_el, 1)), np.full(n_el, material["rho"]), cut)
 
 
 class TubeBendingSystem:
@@ -242,8 +265,9 @@ def tube_three_point(config: dict, covering: str, material: dict, wall: str, *,
         tube = resolved_tube(geometry, mat, length, int(resolution["n_circ"]),
                              int(resolution["per_pitch"]), bool(cov["cut"]))
     else:
-        tube = equivalent_tube(geometry, mat, length, int(resolution["n_circ"]),
-                               int(resolution["n_axial"]), bool(cov["cut"]))
+        build = equivalent_tube if wall == "equivalent" else resultant_tube
+        tube = build(geometry, mat, length, int(resolution["n_circ"]), int(resolution["n_axial"]),
+                     bool(cov["cut"]))
     system = TubeBendingSystem(tube, tp, mu=config["paper"]["interface"]["mu_rtb"] if mu is None else mu,
                                total_time=total_time, ramp=explicit["rate_ramp"],
                                penalty=explicit["penalty"], dt_target=dt_target)
