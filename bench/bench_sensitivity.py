@@ -115,8 +115,9 @@ def main() -> None:
     cfg = load(overrides={"profile": args.profile})
     pipe = cfg["hifi"]["pipeline"]
     pairs = _selected(args.only)
-    if args.only and json.loads(RECORD.read_text())["profile"] != args.profile:
-        raise SystemExit(f"--only at {args.profile}: {RECORD.name} was recorded at another profile")
+    if args.only and (not RECORD.exists() or json.loads(RECORD.read_text())["profile"] != args.profile):
+        raise SystemExit(f"--only at {args.profile}: needs {RECORD.name} recorded at that profile "
+                         "(run the whole screen first)")
     jobs = [(c, None, args.profile) for c in dict.fromkeys(c for c, _ in pairs)]
     jobs += [(c, name, args.profile) for c, name in pairs]
     with Pool(2) as pool:

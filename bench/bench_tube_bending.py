@@ -5,7 +5,7 @@ Run with the project's venv: ``.venv/bin/python bench/bench_tube_bending.py [--d
 Replaces the section "## Ridged tube alone in three-point bending" of bench/RESULTS.md.
 
 Each tube (config ``coverings``, closed by default) at the paper's Table 2 material (config
-``paper.table2``; ``--table2`` a tensile stage's csv instead) runs twice on the test's pins
+``paper.table2``; ``--table2`` a tensile stage's csv instead) runs on the test's pins
 (:mod:`harnesspipe.models.tube_bending`, quarter model): the resolved corrugated wall
 (``--per-pitch`` shells to a pitch, each of the meshes given; ``--n-circ`` round the ring)
 and the smooth shell (the CWB model's default-profile mesh, 16 x 32) with each of the CWB
