@@ -82,26 +82,26 @@ def window_sensitivity(u, F0, F1, window, denominator) -> float:
     return float(np.linalg.norm(F1[sel] - F0[sel]) / np.linalg.norm(F0[sel]) / denominator)
 
 
+PAIRS = [(c, n) for c, (_, names) in CASES.items() for n in names]   # the screen's rows, in order
+
+
 def _selected(only: list[str] | None) -> list[tuple[str, str]]:
     """(case, input) pairs to run: every pair of CASES, or those ``only`` names as
     ``case/input`` (SystemExit naming a pair CASES does not have)."""
-    pairs = [(c, n) for c, (_, names) in CASES.items() for n in names]
     if only is None:
-        return pairs
+        return PAIRS
     wanted = [tuple(o.split("/", 1)) for o in only]
-    unknown = [o for o, w in zip(only, wanted) if w not in pairs]
+    unknown = [o for o, w in zip(only, wanted) if w not in PAIRS]
     if unknown:
-        raise SystemExit(f"--only {unknown}: expected case/input pairs of CASES, e.g. {'/'.join(pairs[0])}")
+        raise SystemExit(f"--only {unknown}: expected case/input pairs of CASES, e.g. {'/'.join(PAIRS[0])}")
     return wanted
 
 
-def _merged(rows: list[dict], only: bool) -> list[dict]:
-    """The record's rows: the new ones, with ``only`` also the recorded rows they do not
-    replace, in CASES order."""
-    old = json.loads(RECORD.read_text())["rows"] if only and RECORD.exists() else []
-    by_pair = {(r["case"], r["input"]): r for r in old + rows}
-    order = [(c, n) for c, (_, names) in CASES.items() for n in names]
-    return [by_pair[p] for p in order if p in by_pair]
+def _merged(rows: list[dict], old: dict | None) -> list[dict]:
+    """The record's rows: the new ones, and the rows of the ``old`` record (``--only``) they
+    do not replace, in CASES order."""
+    by_pair = {(r["case"], r["input"]): r for r in (old["rows"] if old else []) + rows}
+    return [by_pair[p] for p in PAIRS if p in by_pair]
 
 
 def main() -> None:
@@ -115,7 +115,8 @@ def main() -> None:
     cfg = load(overrides={"profile": args.profile})
     pipe = cfg["hifi"]["pipeline"]
     pairs = _selected(args.only)
-    if args.only and (not RECORD.exists() or json.loads(RECORD.read_text())["profile"] != args.profile):
+    old = json.loads(RECORD.read_text()) if args.only and RECORD.exists() else None
+    if args.only and (old is None or old["profile"] != args.profile):
         raise SystemExit(f"--only at {args.profile}: needs {RECORD.name} recorded at that profile "
                          "(run the whole screen first)")
     jobs = [(c, None, args.profile) for c in dict.fromkeys(c for c, _ in pairs)]
@@ -135,7 +136,7 @@ def main() -> None:
         table[f"{case}/{name}"] = S
         new_rows.append({"case": case, "input": name,
                          "S": {w.replace("_window", ""): round(v, 4) for w, v in S.items()}})
-    record = _merged(new_rows, args.only is not None)
+    record = _merged(new_rows, old)
     rows = [f"| {r['case']} | {r['input']} | " + " | ".join(f"{w} {v:.3f}" for w, v in r["S"].items())
             + " |" for r in record]
     step = ", ".join(f"{k} {v:+}" for k, v in ABSOLUTE.items())
@@ -154,21 +155,20 @@ means the window's curve barely sees the input.
 """ + "\n".join(rows) + "\n"
     tail = section_tail(HEADING)          # the notes by hand stay
     write_section(HEADING, text + ("\n" + tail + "\n" if tail else ""))
-    write_record(args.profile, step, record, added=new_rows if args.only else None)
+    write_record(args.profile, step, record, old, added=new_rows)
     print(json.dumps(table, indent=1))
 
 
-def write_record(profile: str, step: str, rows: list[dict], added: list[dict] | None) -> None:
+def write_record(profile: str, step: str, rows: list[dict], old: dict | None, added: list[dict]) -> None:
     """bench/sensitivity.json: the screen's S per case, input and window (``rows``), with what
-    it was run on, for the pipeline's report.  ``added``: rows of an ``--only`` run, which
-    keep the recorded commit and date and name their own in ``added``."""
+    it was run on, for the pipeline's report.  With the ``old`` record (an ``--only`` run) the
+    record keeps its commit and date, and the rows run now (``added``) name their own."""
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True, cwd=RECORD.parent).stdout.strip()
     today = datetime.date.today().isoformat()
     head = {"profile": profile, "commit": commit, "date": today}
     extra = []
-    if added is not None:
-        old = json.loads(RECORD.read_text())
+    if old is not None:
         head = {k: old[k] for k in head}
         replaced = {(r["case"], r["input"]) for r in added}
         extra = [a for a in old.get("added", []) if (a["case"], a["input"]) not in replaced]

@@ -108,16 +108,28 @@ def resolved_tube(geometry: TubeGeometry, material: dict, length: float, n_circ:
     return TubeShells(X, conn, t, t.copy(), mat, np.full(n_el, material["rho"]), cut)
 
 
+def _smooth_grid(geometry: TubeGeometry, eq: dict, length: float, n_circ: int, n_axial: int,
+                 cut: bool):
+    """The smooth cylinder at the equivalent shell's mean radius ``eq["radius"]``: its nodes,
+    quads and the thickness the pins see (d_o/2 - d_i/2, the crests' reach)."""
+    x = np.linspace(0.0, 0.5 * length, n_axial // 2 + 1)
+    X, conn = _tube_grid(x, np.full(x.size, eq["radius"]), n_circ, cut)
+    t_contact = np.full(conn.shape[0], 0.5 * (geometry.d_outer - geometry.d_inner))
+    return X, conn, t_contact
+
+
+def _equivalent(geometry: TubeGeometry, material: dict) -> dict:
+    return equivalent_shell(material["E"], material["sigma_y"], material["K"], material["n"], geometry,
+                            nu=material["nu"], rho=material["rho"])
+
+
 def equivalent_tube(geometry: TubeGeometry, material: dict, length: float, n_circ: int,
                     n_axial: int, cut: bool = False) -> TubeShells:
     """The smooth equivalent shell (:func:`equivalent_shell`) at the mean radius."""
-    eq = equivalent_shell(material["E"], material["sigma_y"], material["K"], material["n"], geometry,
-                          nu=material["nu"], rho=material["rho"])
-    x = np.linspace(0.0, 0.5 * length, n_axial // 2 + 1)
-    X, conn = _tube_grid(x, np.full(x.size, eq["radius"]), n_circ, cut)
+    eq = _equivalent(geometry, material)
+    X, conn, t_contact = _smooth_grid(geometry, eq, length, n_circ, n_axial, cut)
     n_el = conn.shape[0]
-    t_contact = 0.5 * (geometry.d_outer - geometry.d_inner)
-    return TubeShells(X, conn, np.full(n_el, eq["t"]), np.full(n_el, t_contact),
+    return TubeShells(X, conn, np.full(n_el, eq["t"]), t_contact,
                       _row(eq["E"], eq["nu"], eq["sigma_y"], eq["K"], eq["n"], n_el),
                       np.full(n_el, eq["rho"]), cut)
 
@@ -127,15 +139,12 @@ def resultant_tube(geometry: TubeGeometry, material: dict, length: float, n_circ
     """The smooth shell of :func:`equivalent_tube` with the ridged wall's resultant law
     (:func:`harnesspipe.models.tube_equivalent.wall_row`; thickness: the wall area per
     unit length, which carries the mass)."""
-    eq = equivalent_shell(material["E"], material["sigma_y"], material["K"], material["n"], geometry,
-                          nu=material["nu"], rho=material["rho"])
     w = wall_resultants(material["E"], material["sigma_y"], material["K"], material["n"], geometry,
                         nu=material["nu"])
-    x = np.linspace(0.0, 0.5 * length, n_axial // 2 + 1)
-    X, conn = _tube_grid(x, np.full(x.size, eq["radius"]), n_circ, cut)
+    X, conn, t_contact = _smooth_grid(geometry, _equivalent(geometry, material), length, n_circ,
+                                      n_axial, cut)
     n_el = conn.shape[0]
-    t_contact = 0.5 * (geometry.d_outer - geometry.d_inner)
-    return TubeShells(X, conn, np.full(n_el, w["mass_thickness"]), np.full(n_el, t_contact),
+    return TubeShells(X, conn, np.full(n_el, w["mass_thickness"]), t_contact,
                       np.tile(wall_row(w, MAT_TUBE), (n_el, 1)), np.full(n_el, material["rho"]), cut)
 
 
