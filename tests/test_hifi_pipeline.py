@@ -726,8 +726,8 @@ def test_hifi_targets_resolve_and_run(project):
                                                                      *hifi_chain.BUILD]
     assert list(pd.read_csv(res / "crosscheck" / "table3.csv").columns) == ["case", "E", "sigma_y", "K", "n",
                                                                             "reference"]
-    for step in ("binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_binding",
-                 "fabric_build", "fabric"):
+    for step in ("binding", "build", "tension", "closure", "fill", "mu_rtb", "mu_rtp", "cohesive",
+                 "fabric_binding", "fabric_build", "fabric"):
         for name in ("fit.json", "curve.csv", "trace.h5", "rejected.jsonl", "fit.png"):
             assert (res / "chain" / step / name).exists()
         # the friction fits (window < 20 mm) end their runs 1 mm past it; the others go to 30

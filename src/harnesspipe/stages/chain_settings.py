@@ -2,14 +2,17 @@
 
 The chain in order: each step fixes what the earlier steps fitted (``prior``).  It starts
 with the specimen's build state that the sensitivity screen shows the curves depend on
-(which wires the end bands bind, ``binding``, a pick between its two values; the end bands'
-wraps, ``build``, then the tape's wrapping tension, ``tension``: two bounded searches in
-turn; each on the whole test of both tube CWBs; bench/RESULTS.md "Hi-fi sensitivity
-screen"), then the paper's steps; before the paper's fabric step, the fabric
-CWB's own end bands, which wires they bind (``fabric_binding``, a pick like ``binding``) and
-their wraps (``fabric_build``): its tape is only at the ends, and the tube CWBs' fitted
-bands hold its curled sleeve too stiffly (bench/RESULTS.md "The fabric sleeve curled onto its
-bundle", "Which wires the end bands bind").  ``cores``:
+(bench/RESULTS.md "Hi-fi sensitivity screen"): on the whole test of both tube CWBs, which
+wires the end bands bind (``binding``, a pick between its two values), the end bands' wraps
+(``build``) and the tape's wrapping tension (``tension``), two bounded searches in turn; then,
+at those end bands, whether the half-lap CWB's slit tube is rolled onto its wires or stays as
+moulded (``closure``, a pick) and how the closed CWB's wires lie in their tube (``fill``, a
+bounded search) -- each on the one calibration case it acts on.  Then the paper's steps;
+before the paper's fabric step, the fabric CWB's own end bands, which wires they bind
+(``fabric_binding``, a pick like ``binding``) and their wraps (``fabric_build``): its tape is
+only at the ends, and the tube CWBs' fitted bands hold its curled sleeve too stiffly
+(bench/RESULTS.md "The fabric sleeve curled onto its bundle", "Which wires the end bands
+bind").  ``cores``:
 the step's Snakemake threads.  Nothing else of the chain can run beside the friction and
 cohesive fits (every virtual test needs their interface), so they take both cores (one process
 per case, or one process with two Numba threads); the fabric fit takes one, and the virtual
@@ -23,44 +26,46 @@ from __future__ import annotations
 
 import json
 
-STEPS = {
-    "binding": {"names": ["end_tape_binds"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
-                "window": "build_window", "method": "choice", "choices": "binds_choices",
-                "prior": [], "cores": 2},
-    "build": {"names": ["end_tape_layers"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
-              "window": "build_window", "method": "bounded", "bounds": "layers_bounds",
-              "prior": ["binding"], "cores": 2},
-    "tension": {"names": ["tape_tension"], "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"],
-                "window": "build_window", "method": "bounded", "bounds": "tension_bounds",
-                "prior": ["binding", "build"], "cores": 2},
+def _chained(steps: dict) -> dict:
+    """``steps`` with each one's ``prior``: every step before it (the chain runs in order)."""
+    return {name: {**s, "prior": list(steps)[:i]} for i, (name, s) in enumerate(steps.items())}
+
+
+TUBE_CWBS = ["cwb19_t2_closed", "cwb19_t2_open_halflap"]
+STEPS = _chained({
+    "binding": {"names": ["end_tape_binds"], "cases": TUBE_CWBS, "window": "build_window",
+                "method": "choice", "choices": "binds_choices", "cores": 2},
+    "build": {"names": ["end_tape_layers"], "cases": TUBE_CWBS, "window": "build_window",
+              "method": "bounded", "bounds": "layers_bounds", "cores": 2},
+    "tension": {"names": ["tape_tension"], "cases": TUBE_CWBS, "window": "build_window",
+                "method": "bounded", "bounds": "tension_bounds", "cores": 2},
+    "closure": {"names": ["tube_closure"], "cases": ["cwb19_t2_open_halflap"],
+                "window": "build_window", "method": "choice", "choices": "closure_choices",
+                "cores": 2},
+    "fill": {"names": ["wire_fill"], "cases": ["cwb19_t2_closed"], "window": "build_window",
+             "method": "bounded", "bounds": "fill_bounds", "cores": 2},
     "mu_rtb": {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": "friction_window",
-               "method": "bounded", "bounds": "mu_bounds", "prior": ["binding", "build", "tension"],
-               "cores": 2},
+               "method": "bounded", "bounds": "mu_bounds", "cores": 2},
     "mu_rtp": {"names": ["mu_rtp"], "cases": ["cwb19_t2_open_halflap"],
-               "window": "friction_window", "method": "bounded", "bounds": "mu_bounds",
-               "prior": ["binding", "build", "tension", "mu_rtb"], "cores": 2},
-    "cohesive": {"names": ["delta0", "delta_f", "alpha_d"],
-                 "cases": ["cwb19_t2_closed", "cwb19_t2_open_halflap"], "window": "cohesive_window",
-                 "method": "simplex", "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp"],
-                 "cores": 2},
+               "window": "friction_window", "method": "bounded", "bounds": "mu_bounds", "cores": 2},
+    "cohesive": {"names": ["delta0", "delta_f", "alpha_d"], "cases": TUBE_CWBS,
+                 "window": "cohesive_window", "method": "simplex", "cores": 2},
     "fabric_binding": {"names": ["fabric_end_tape_binds"], "cases": ["cwb19_t2_fabric"],
                        "window": "fabric_window", "method": "choice", "choices": "binds_choices",
-                       "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive"], "cores": 1},
+                       "cores": 1},
     "fabric_build": {"names": ["fabric_end_tape_layers"], "cases": ["cwb19_t2_fabric"],
                      "window": "fabric_window", "method": "bounded", "bounds": "layers_bounds",
-                     "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive",
-                               "fabric_binding"], "cores": 1},
+                     "cores": 1},
     "fabric": {"names": ["E2_over_E1"], "cases": ["cwb19_t2_fabric"], "window": "fabric_window",
-               "method": "bounded", "bounds": "E2_bounds",
-               "prior": ["binding", "build", "tension", "mu_rtb", "mu_rtp", "cohesive", "fabric_binding",
-                         "fabric_build"], "cores": 1},
-}
+               "method": "bounded", "bounds": "E2_bounds", "cores": 1},
+})
 VALIDATION = ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric")   # Sec. 4.2: predicted, no refit
 CALIBRATED = sorted({c for s in STEPS.values() for c in s["cases"]})
-BUILD = ("end_tape_binds", "end_tape_layers", "tape_tension", "fabric_end_tape_binds",
-         "fabric_end_tape_layers")   # build-state inputs the chain fits (config hifi.build)
+BUILD = ("end_tape_binds", "end_tape_layers", "tape_tension", "tube_closure", "wire_fill",
+         "fabric_end_tape_binds", "fabric_end_tape_layers")   # build-state inputs the chain fits (config hifi.build)
 WINDOWS = ("build_window", "friction_window", "cohesive_window", "fabric_window",
-           "layers_bounds", "tension_bounds", "mu_bounds", "E2_bounds", "binds_choices")
+           "layers_bounds", "tension_bounds", "fill_bounds", "mu_bounds", "E2_bounds", "binds_choices",
+           "closure_choices")
 
 
 def check_windows(config: dict) -> None:
