@@ -726,7 +726,7 @@ def test_hifi_targets_resolve_and_run(project):
                                                                      *hifi_chain.BUILD]
     assert list(pd.read_csv(res / "crosscheck" / "table3.csv").columns) == ["case", "E", "sigma_y", "K", "n",
                                                                             "reference"]
-    for step in ("binding", "build", "tension", "closure", "fill", "mu_rtb", "mu_rtp", "cohesive",
+    for step in ("binding", "build", "tension", "closure", "mu_rtb", "mu_rtp", "cohesive",
                  "fabric_binding", "fabric_build", "fabric"):
         for name in ("fit.json", "curve.csv", "trace.h5", "rejected.jsonl", "fit.png"):
             assert (res / "chain" / step / name).exists()

@@ -57,7 +57,7 @@ def test_outputs_of_every_stage(project):
     interface = pd.read_csv(res / "hifi" / "interface.csv")
     assert list(interface["parameter"]) == ["mu_rtb", "mu_rtp", "delta0", "delta_f", "alpha_d", "E2_over_E1",
                                             "end_tape_binds", "end_tape_layers", "tape_tension",
-                                            "tube_closure", "wire_fill", "fabric_end_tape_binds",
+                                            "tube_closure", "fabric_end_tape_binds",
                                             "fabric_end_tape_layers"]  # the build state last
     assert sorted(p.name for p in (res / "hifi" / "virtual").iterdir()) == sorted(
         ["cwb19_t2_closed", "cwb19_t2_open_halflap", "cwb19_t2_open_coarse", "cwb19_t1_open_coarse",

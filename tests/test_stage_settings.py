@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from harnesspipe import config as hp_config
 from harnesspipe.stages import chain_settings as chain
 from harnesspipe.stages import stage_settings as settings
@@ -73,36 +75,31 @@ def test_chain_starts_with_the_build_state_and_carries_it():
     assert b["cases"] == s["cases"] and b["window"] == s["window"] and set(b["start"]) == set(s["start"])
 
 
-def test_slit_tube_closure_and_wire_fill_are_decided_on_the_case_each_acts_on():
+def test_slit_tube_closure_is_picked_on_the_half_lap_cwb_after_the_end_bands():
     """After the end bands (binding, build, tension), closure picks tube_closure from
-    closure_choices on the half-lap CWB alone and fill searches wire_fill over fill_bounds on
-    the closed CWB alone, each from its config start; every later step takes both, so the
-    interface the virtual tests read carries them."""
+    closure_choices on the half-lap CWB alone (the one calibration case with a slit tube),
+    from its config start; every later step takes the pick, so the interface the virtual
+    tests read carries it."""
     cfg = hp_config.load()
     pipe = cfg["hifi"]["pipeline"]
     c = json.loads(chain.fit_settings(cfg, "closure"))
     assert c["names"] == ["tube_closure"] and c["cases"] == ["cwb19_t2_open_halflap"]
     assert c["method"] == "choice" and c["choices"] == pipe["closure_choices"]
     assert c["start"]["tube_closure"] == cfg["hifi"]["build"]["tube_closure"] and c["window"] == pipe["build_window"]
-    f = json.loads(chain.fit_settings(cfg, "fill"))
-    assert f["names"] == ["wire_fill"] and f["cases"] == ["cwb19_t2_closed"]
-    assert f["method"] == "bounded" and f["bounds"] == pipe["fill_bounds"]
-    assert f["start"]["wire_fill"] == cfg["hifi"]["build"]["wire_fill"]
     assert chain.STEPS["closure"]["prior"] == ["binding", "build", "tension"]
-    assert chain.STEPS["fill"]["prior"] == ["binding", "build", "tension", "closure"]
-    assert all({"closure", "fill"} <= set(step["prior"]) for name, step in chain.STEPS.items()
-               if name not in ("binding", "build", "tension", "closure", "fill"))
-    assert {"tube_closure", "wire_fill"} <= set(chain.BUILD)
-    # every step's start holds both, so a run's identity does not depend on the step that made it
-    assert all({"tube_closure", "wire_fill"} <= set(json.loads(chain.fit_settings(cfg, s))["start"])
-               for s in chain.STEPS)
+    assert all("closure" in step["prior"] for name, step in chain.STEPS.items()
+               if name not in ("binding", "build", "tension", "closure"))
+    # every step's start holds it, so a run's identity does not depend on the step that made it
+    assert all("tube_closure" in json.loads(chain.fit_settings(cfg, s))["start"] for s in chain.STEPS)
+    bad = hp_config.load(overrides={"hifi": {"pipeline": {"closure_choices": [1.0, 0.0]}}})
+    with pytest.raises(ValueError, match="hifi.pipeline.closure_choices"):
+        chain.check_windows(bad)
 
 
 def test_chain_fits_at_the_chain_profile_and_virtual_tests_at_the_run_profile():
     """hifi.pipeline.chain_profile: the fits' models carry that profile's mesh, the virtual
     tests the run's own; a virtual test reuses a fit's run only when the two meshes agree; a
     name that is no profile is refused naming the key."""
-    import pytest
     cfg = hp_config.load(overrides={"profile": "default", "hifi": {"pipeline": {"chain_profile": "quick"}}})
     fit = json.loads(chain.fit_settings(cfg, "build"))
     for m in fit["models"].values():

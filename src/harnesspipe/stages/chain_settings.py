@@ -5,19 +5,18 @@ with the specimen's build state that the sensitivity screen shows the curves dep
 (bench/RESULTS.md "Hi-fi sensitivity screen"): on the whole test of both tube CWBs, which
 wires the end bands bind (``binding``, a pick between its two values), the end bands' wraps
 (``build``) and the tape's wrapping tension (``tension``), two bounded searches in turn; then,
-at those end bands, whether the half-lap CWB's slit tube is rolled onto its wires or stays as
-moulded (``closure``, a pick) and how the closed CWB's wires lie in their tube (``fill``, a
-bounded search) -- each on the one calibration case it acts on.  Then the paper's steps;
-before the paper's fabric step, the fabric CWB's own end bands, which wires they bind
-(``fabric_binding``, a pick like ``binding``) and their wraps (``fabric_build``): its tape is
-only at the ends, and the tube CWBs' fitted bands hold its curled sleeve too stiffly
-(bench/RESULTS.md "The fabric sleeve curled onto its bundle", "Which wires the end bands
-bind").  ``cores``:
-the step's Snakemake threads.  Nothing else of the chain can run beside the friction and
-cohesive fits (every virtual test needs their interface), so they take both cores (one process
-per case, or one process with two Numba threads); the fabric fit takes one, and the virtual
-tests of the other cases run beside it (one Numba thread per run is the efficient use of a
-core).  ``window`` and ``bounds`` name keys of the config's ``hifi.pipeline``.
+at those end bands, whether the half-lap CWB's slit tube is rolled onto its wires or stays
+as moulded (``closure``, a pick, on the one calibration case with a slit tube).  Then the
+paper's steps; before the paper's fabric step, the fabric CWB's own end bands, which wires
+they bind (``fabric_binding``, a pick like ``binding``) and their wraps (``fabric_build``):
+its tape is only at the ends, and the tube CWBs' fitted bands hold its curled sleeve too
+stiffly (bench/RESULTS.md "The fabric sleeve curled onto its bundle", "Which wires the end
+bands bind").  ``cores``: the step's Snakemake threads.  Nothing else of the chain can run
+beside the friction and cohesive fits (every virtual test needs their interface), so they
+take both cores (one process per case, or one process with two Numba threads); the fabric
+fit takes one, and the virtual tests of the other cases run beside it (one Numba thread per
+run is the efficient use of a core).  ``window`` and ``bounds`` name keys of the config's
+``hifi.pipeline``.
 
 The settings are JSON texts: a rule passes them as a param, so a rule reruns exactly when the
 settings of its run change (workflow/rules/hifi.smk).
@@ -42,8 +41,6 @@ STEPS = _chained({
     "closure": {"names": ["tube_closure"], "cases": ["cwb19_t2_open_halflap"],
                 "window": "build_window", "method": "choice", "choices": "closure_choices",
                 "cores": 2},
-    "fill": {"names": ["wire_fill"], "cases": ["cwb19_t2_closed"], "window": "build_window",
-             "method": "bounded", "bounds": "fill_bounds", "cores": 2},
     "mu_rtb": {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": "friction_window",
                "method": "bounded", "bounds": "mu_bounds", "cores": 2},
     "mu_rtp": {"names": ["mu_rtp"], "cases": ["cwb19_t2_open_halflap"],
@@ -61,10 +58,10 @@ STEPS = _chained({
 })
 VALIDATION = ("cwb19_t1_open_coarse", "cwb10t1_9t2_fabric")   # Sec. 4.2: predicted, no refit
 CALIBRATED = sorted({c for s in STEPS.values() for c in s["cases"]})
-BUILD = ("end_tape_binds", "end_tape_layers", "tape_tension", "tube_closure", "wire_fill",
-         "fabric_end_tape_binds", "fabric_end_tape_layers")   # build-state inputs the chain fits (config hifi.build)
+BUILD = ("end_tape_binds", "end_tape_layers", "tape_tension", "tube_closure", "fabric_end_tape_binds",
+         "fabric_end_tape_layers")   # build-state inputs the chain fits (config hifi.build)
 WINDOWS = ("build_window", "friction_window", "cohesive_window", "fabric_window",
-           "layers_bounds", "tension_bounds", "fill_bounds", "mu_bounds", "E2_bounds", "binds_choices",
+           "layers_bounds", "tension_bounds", "mu_bounds", "E2_bounds", "binds_choices",
            "closure_choices")
 
 
