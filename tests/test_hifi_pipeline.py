@@ -221,6 +221,27 @@ def test_the_report_gives_a_choice_step_its_values_errors_and_why():
     assert "<td>search interval</td><td>one of [0, 1]</td>" in text and "did not converge" not in text
 
 
+@pytest.mark.parametrize("method, errors, n_names, tie, margin", [
+    ("bounded", (6.95, 4.78, 4.91), 1, 2.18, -0.01),    # the fill step of session 38: screened by 0.01 N
+    ("bounded", (19.68, 18.90, 18.64, 19.0), 1, 4.38, -3.34),   # its first three only
+    ("simplex", (13.0, 13.0, 12.0, 13.5, 11.0), 3, 3.0, -1.5),
+    ("choice", (77.55, 27.10), 1, 4.38, 46.07),         # the binding step: 1 picked
+    ("choice", (12.73, 14.69), 1, 2.20, -4.16),          # the closure step: the start kept
+    ("choice", (5.0, 6.0, 4.0), 1, 0.5, 0.5),            # the best of the others
+    ("bounded", (6.95, 4.78), 1, 2.18, None),            # fewer evaluations than the screen's
+    ("bounded", (6.95, 1e9, 4.91), 1, 2.18, None),       # a rejected one: the screen does not act
+    ("choice", (1e9, 3.0), 1, 2.18, None),               # a rejected start gives way, no threshold
+    ("bounded", (6.95, 4.78, 4.91), 1, 0.0, None),       # no screen
+])
+def test_decision_margin_is_the_distance_of_a_steps_jump_from_its_threshold(method, errors, n_names,
+                                                                           tie, margin):
+    """A pick switches when the start's error exceeds the best other's by the tie; a search's
+    screen keeps the start when its first evaluations spread by less than the tie: the margin
+    is the signed distance from that threshold, None where no such decision was made."""
+    got = hcal.decision_margin(method, errors, n_names, tie, penalty=1e9)
+    assert got == (None if margin is None else pytest.approx(margin, abs=1e-9))
+
+
 def _pick_of(trace, tie, names, penalty=np.inf):
     """The weighted mean of a trace's rows before the last (the pick's own evaluation)."""
     rows = trace.iloc[:-1]
@@ -415,6 +436,12 @@ def test_fit_step_screens_against_the_scatter_of_the_measured_mean(tmp_path, fak
     fit = hifi_chain.fit_step("mu_rtb", settings, refs, tmp_path / "fit", runner=runner_of(fake))
     assert (fit["nfev"] == 3) == screened           # the start, then the two golden-section points
     assert ("not identifiable" in fit["message"]) == screened
+    with h5py.File(tmp_path / "fit" / "trace.h5") as f:      # the screen's decision and its margin
+        first = f["error"][:3]
+    d = fit["decision"]
+    assert d["margin_N"] == pytest.approx(first.max() - first.min() - d["threshold_N"]) if flat_factor else \
+        d["margin_N"] is None
+    assert (d["margin_N"] is not None and d["margin_N"] < 0) == screened and not d["marginal"]
     if screened:     # a near tie is no choice: the start value, exactly, and the message says so
         assert fit["parameters"]["mu_rtb"] == 0.2 and "start value is kept" in fit["message"]
     elif flat_factor == 0.0:
@@ -423,6 +450,27 @@ def test_fit_step_screens_against_the_scatter_of_the_measured_mean(tmp_path, fak
         assert 0.2 < fit["parameters"]["mu_rtb"] < 0.3 - 2e-3 and "weighted by" in fit["message"]
         with h5py.File(tmp_path / "fit" / "trace.h5") as f:
             assert f["x"][-1, 0] == fit["parameters"]["mu_rtb"] and f["x"].shape[0] == fit["nfev"]
+
+
+@pytest.mark.parametrize("bits_spread", [0.0, 1.0])
+def test_fit_step_flags_a_decision_within_the_runs_last_bits_spread(tmp_path, fake, bits_spread):
+    """The screened step above (margin about -0.08 ||u||) with ``bits_spread`` the whole
+    measured norm: its decision is within the spread, flagged in fit.json and its message;
+    with none it is not."""
+    u = np.linspace(0.0, 30.0, 101)
+    refs = {"cwb19_t2_closed": write_prepared(tmp_path / "closed.h5", "cwb19_t2_closed",
+                                              fake.force(u, fake.TRUTH, "closed_tube"), u, scatter=0.2)}
+    settings = {"names": ["mu_rtb"], "cases": ["cwb19_t2_closed"], "window": [0.0, 20.0], "method": "bounded",
+                "bounds": [0.0, 0.3], "xatol": 1e-3, "fatol": None, "maxfev": 30, "flat_factor": 1.0,
+                "bits_spread": bits_spread,
+                "start": {"mu_rtb": 0.2, "mu_rtp": 0.1, "delta0": 0.05, "delta_f": 0.1, "alpha_d": 1.0},
+                "models": {"cwb19_t2_closed": MODEL}, "set": {}}
+    fit = hifi_chain.fit_step("mu_rtb", settings, refs, tmp_path / "fit", runner=runner_of(fake))
+    d = fit["decision"]
+    assert d["margin_N"] < 0 and d["marginal"] == (bits_spread > 0)
+    assert d["bits_spread_N"] == pytest.approx(bits_spread * fit["error_l2"] / fit["error_rel"])
+    assert ("marginal: this decision lies" in fit["message"]) == (bits_spread > 0)
+    assert fit["parameters"]["mu_rtb"] == 0.2          # the flag says; it changes nothing
 
 
 def test_flat_screen_is_not_fooled_by_rejected_points():

@@ -342,3 +342,21 @@ def test_a_step_says_where_its_search_rests(tree):
     assert "(search stopped at its budget of evaluations" in step
     cohesive = text[text.index("id='calibration-step-cohesive'"):]
     assert "not identifiable" in cohesive[:2000] and "The fit rests at" not in cohesive[:2000]
+
+
+def test_a_marginal_chain_decision_is_said_in_its_step_and_the_limitations(tree):
+    """A chain step whose decision lies within the runs' last-bits spread of its threshold
+    (fit.json ``decision.marginal``) is named in the limitations and said in its step's block;
+    the same step without the flag is in neither."""
+    path = tree["res"] / "hifi" / "chain" / "mu_rtb" / "fit.json"
+    fit = json.loads(path.read_text())
+    measured = report_html._measured_by_case(tree["prepared"])
+    rows = verdict.verdict_rows(tree["cfg"], tree["res"], tree["fits"], {}, measured)
+    for marginal in (True, False):
+        decision = {"margin_N": -0.01, "bits_spread_N": 0.99, "threshold_N": 2.18, "marginal": marginal}
+        path.write_text(json.dumps({**fit, "decision": decision}))
+        text = " ".join(verdict.limitations(rows, tree["cfg"], tree["res"], tree["fits"], {}, measured))
+        assert ("last-bits spread of their threshold (another machine may decide them the other "
+                "way): mu_rtb." in text) is marginal
+        block = report_html._step_text({**fit, "decision": decision}, {}, tree["cfg"])
+        assert block.count("Marginal: this decision lies 0.01 N from its threshold (2.18 N") == marginal

@@ -268,3 +268,29 @@ def flat_screen(n_first: int, floor: float, penalty: float = np.inf):
                 f"differ by {spread:.3g} N, less than the standard error of the measured mean "
                 f"({floor:.3g} N, l2 over the window)")
     return stop
+
+
+def decision_margin(method: str, errors, n_names: int, tie: float,
+                    penalty: float = np.inf) -> float | None:
+    """Signed distance [N] of a fit step's threshold decision from its threshold ``tie`` (the
+    standard error of the measured mean, :func:`flat_screen`'s floor), from the step's
+    evaluation errors in logged order.  A pick (``choice``, :func:`choice_fit`): the start's
+    error minus the best other's minus ``tie`` (> 0: the other value is picked).  A search
+    (``bounded``, ``simplex``): the spread of its first evaluations (the start and Brent's two
+    golden-section points, or the +5 % simplex) minus ``tie`` (< 0: the screen ends it and the
+    start is kept).  Every other outcome of a search moves continuously with the errors
+    (:func:`harnesspipe.calibrate.simplex.rest_at_pick`); these two jump, so a margin within
+    the runs' last-bits spread means another machine may decide the other way.  None: no such
+    decision (no screen, too few or rejected evaluations)."""
+    errors = np.asarray(errors, dtype=float)
+    if tie <= 0.0:
+        return None
+    if method == "choice":
+        if len(errors) < 2 or not np.all(errors < penalty):
+            return None
+        return float(errors[0] - errors[1:].min() - tie)
+    n_first = n_names + 1 if method == "simplex" else 3      # as the steps' flat_screen
+    first = errors[:n_first]
+    if len(first) < n_first or not np.all(first < penalty):
+        return None
+    return float(first.max() - first.min() - tie)

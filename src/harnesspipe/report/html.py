@@ -718,9 +718,21 @@ def _pick_words(message: str) -> str:
             "l2 over the window; points the data do not tell apart share the weight).")
 
 
+def _marginal_words(fit: dict) -> str:
+    """A sentence when the step's pick or identifiability screen lies within the runs'
+    last-bits spread of its threshold (fit.json ``decision``), else ""."""
+    d = fit.get("decision") or {}
+    if not d.get("marginal"):
+        return ""
+    return (f' <span class="bad">Marginal: this decision lies {abs(d["margin_N"]):.3g} N from its '
+            f'threshold ({d["threshold_N"]:.3g} N, the standard error of the measured mean), within '
+            f'the runs\' last-bits spread ({d["bits_spread_N"]:.3g} N, hifi.pipeline.fidelity_spread): '
+            "on another machine it may go the other way, and every later step with it.</span>")
+
+
 def _step_text(fit: dict, paper: dict, cfg: dict) -> str:
     """Heading, method, window, error, cost and fitted values of one calibration step."""
-    message = fit.get("message", "")
+    message = fit.get("message", "").split("; marginal:")[0]      # said by _marginal_words
     ended = ("stopped at its budget of evaluations (hifi.pipeline.budgets)"
              if message.startswith("Maximum number of function") else "did not converge")
     status = "" if fit.get("converged") else f' <span class="bad">(search {ended})</span>'
@@ -729,6 +741,7 @@ def _step_text(fit: dict, paper: dict, cfg: dict) -> str:
     status += _pick_words(message)
     if fit.get("method") == "choice":            # the pick between a few values: its errors and why
         status = f" {html.escape(message)}."
+    status += _marginal_words(fit)
     searched = (str(fit["bounds"]) if fit.get("bounds") else
                 f"one of {fit['choices']}" if fit.get("choices") else "")
     cases = "; ".join(labelled(c, cfg) for c in fit.get("cases", []))

@@ -546,13 +546,19 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
             if not fit.get("converged", True) and fit.get("role", "calibration") == "calibration":
                 unconverged.append(f"{STAGE_NAMES[stage]} of {physical_name(fit['item'], cfg)} "
                                    f"({fit['nfev']} evaluations)")
+    marginal = []
     for p in sorted((Path(results) / "hifi" / "chain").glob("*/fit.json")):
         fit = read_fit(p)
         if not fit.get("converged", True) and "not identifiable" not in str(fit.get("message", "")):
             unconverged.append(f"hi-fi step {fit['item']} ({fit['nfev']} evaluations)")
+        if (fit.get("decision") or {}).get("marginal"):
+            marginal.append(fit["item"])
     if unconverged:
         out.append("The optimiser stopped at its evaluation limit without converging for: "
                    + "; ".join(unconverged) + ".")
+    if marginal:
+        out.append("Hi-fi chain decisions within the runs' last-bits spread of their threshold "
+                   f"(another machine may decide them the other way): {', '.join(marginal)}.")
     for sentence in (_quasi_static(results, cfg), _falls(results, cfg, measured)):
         out += [sentence] if sentence else []
     if truth:

@@ -215,6 +215,7 @@ def fit_settings(config: dict, step: str) -> str:
         "fatol": None if bounded or choice else pipe["simplex"]["fatol"],
         "maxfev": budget(config)["bounded_maxfev" if bounded else "simplex_maxfev"],
         "flat_factor": pipe["flat_factor"],
+        "bits_spread": pipe["fidelity_spread"],
         "start": start,
         "models": {c: model(config, c, resolution, profile=profile) for c in s["cases"]},
         "set": {**fit_stop(config, window), **pipe["set"]},

@@ -220,7 +220,9 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
     initial guesses), ``models`` (case -> model config), ``set``, ``flat_factor``
     (optional, 0 if absent: the identifiability screen :func:`hcal.flat_screen` stops a
     search whose first evaluations differ by less than this many times the l2 standard
-    error of the measured means over the window).  ``priors``: fit.json
+    error of the measured means over the window), ``bits_spread`` (optional, 0 if absent: a
+    decision of the search within this fraction of the measured means' l2 norm of its
+    threshold is flagged ``marginal``, :func:`_decision`).  ``priors``: fit.json
     of the earlier steps, whose fitted parameters replace the start values.  ``workers``
     > 1: the cases of each evaluation run side by side in that many processes
     (``runner`` must then be picklable).
@@ -258,9 +260,9 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                                        pool=pool, on_run=lambda c, p, run: runs.update({(c, _pkey(p)): run}))
         t0 = time.perf_counter()
         res = _inert_cohesion(step, settings, objective, names, fixed, live, key, runs, cases)
+        tie = _mean_uncertainty(refs, window) * float(settings.get("flat_factor", 0.0))
         if res is None:
-            res = _search(step, settings, objective, names, fixed, live, key,
-                          _mean_uncertainty(refs, window))
+            res = _search(step, settings, objective, names, fixed, live, key, tie)
     best = objective.params(res.x)
     rejected_keys = {_pkey(r["parameters"]) for r in hcal.read_rejected(rejected_live, key)}
     if not np.isfinite(res.fun) or _pkey(best) in rejected_keys:
@@ -291,6 +293,11 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
     _copy_atomic(rejected_live, outdir / "rejected.jsonl")
     norm = sum(float(np.linalg.norm(F[hcal.window_mask(u, w)])) for _, u, F, w in targets)
     trace = res.trace
+    decision = _decision(settings, trace, len(names), tie, objective.penalty, norm)
+    if decision["marginal"]:
+        res.message += (f"; marginal: this decision lies {abs(decision['margin_N']):.3g} N from its "
+                        f"threshold, within the runs' last-bits spread ({decision['bits_spread_N']:.3g} N): "
+                        "on another machine it may go the other way")
     reused = sum(isinstance(r, StoredRun) for r in runs.values())
     path = write_fit(
         outdir, stage="hifi", item=step, test_id=",".join(refs[c].test_id for c in cases),
@@ -299,7 +306,7 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
         extra={"role": "calibration", "method": settings["method"], "cases": cases, "window": list(window),
                "bounds": settings.get("bounds"), "choices": settings.get("choices"),
                "interface": {**NEUTRAL, **best}, "priors": prior_ids,
-               "per_case": per_case, "message": res.message,
+               "per_case": per_case, "message": res.message, "decision": decision,
                "hifi_runs": int(len(trace) * len(cases) + reruns),   # upper bound: a rejection stops early
                "hifi_runs_this_process": int(objective.n_runs + reruns - reused),
                "hifi_runs_reused": int(reused),
@@ -375,18 +382,30 @@ def _mean_uncertainty(refs: dict, window) -> float:
                for r in refs.values())
 
 
+def _decision(settings: dict, trace: pd.DataFrame, n_names: int, tie: float, penalty: float,
+              norm: float) -> dict:
+    """The step's threshold decision (:func:`hcal.decision_margin`) against the runs' last-bits
+    spread, ``bits_spread`` x the measured means' l2 norm over the window (config
+    ``hifi.pipeline.fidelity_spread``: five last-bit copies of one run spread by 0.66 % of it):
+    ``marginal`` when the margin is smaller."""
+    errors = trace["error"].to_numpy(float) if len(trace) else np.zeros(0)
+    margin = hcal.decision_margin(settings["method"], errors, n_names, tie, penalty)
+    spread = float(settings.get("bits_spread", 0.0)) * norm
+    return {"margin_N": margin, "bits_spread_N": spread, "threshold_N": tie,
+            "marginal": margin is not None and abs(margin) < spread}
+
+
 def _search(step, settings, objective, names, fixed, live, key, floor):
     """The bounded search (one parameter), Nelder-Mead (several) or the pick among a few
     values (``choice``: :func:`hcal.choice_fit`, the same floor) of a fit step, with the
-    identifiability screen :func:`hcal.flat_screen` at ``floor`` x ``flat_factor`` over the
-    start and the first points; a search the screen ends keeps the start values (``fixed``),
+    identifiability screen :func:`hcal.flat_screen` at ``floor`` (the measured mean's standard
+    error x ``flat_factor``) over the start and the first points; a search the screen ends keeps the start values (``fixed``),
     whatever its first points gave; one that runs its course rests at the mean of its
     evaluations weighted by exp(-((e - e_min)/tie)^2/2), tie the same tolerance, evaluated
     there (:func:`harnesspipe.calibrate.simplex.rest_at_pick`): a pick that moves
     continuously with the errors, where a threshold's pick could hinge on the runs' last
     bits."""
     log = live / "evaluations.h5"
-    floor = floor * float(settings.get("flat_factor", 0.0))
     if settings["method"] == "bounded":
         if len(names) != 1:
             raise ConfigError(f"hifi fit {step}: a bounded search fits one parameter, not {names}")
