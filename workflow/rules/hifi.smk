@@ -1,9 +1,10 @@
 # Hi-fi virtual three-point tests (DESIGN stages 3-7 on the mesoscale model, Sec. 4.1-4.3):
 #   hifi_crosscheck_all: every Table 3 case at the PAPER's Table 2 and interface values, then
 #       eq. 13 + simplex on each curve -> results/hifi/crosscheck/table3.csv beside the paper's;
-#   hifi_chain_all: the Sec. 4.2 calibration chain against the measured means
-#       (mu_rtb -> mu_rtp -> cohesive -> E2/E1) -> results/hifi/interface.csv, then the virtual
-#       test of every case (incl. hifi.extra_cases) at the fitted interface.
+#   hifi_chain_all: the Sec. 4.2 calibration chain against the measured means (the build state,
+#       then mu_rtb -> mu_rtp -> cohesive -> E2/E1; the steps: stages/chain_settings.STEPS)
+#       -> results/hifi/interface.csv, then the virtual test of every case (incl.
+#       hifi.extra_cases) at the fitted interface.
 # `all` includes the groups named in hifi.pipeline.in_all (stages/targets.py; the chain's fits
 # run on the mesh of hifi.pipeline.chain_profile, the virtual tests on the run's profile;
 # the whole quick pipeline 23-30 min on 2 cores, bench/RESULTS.md; crosscheck: 5 more runs).
