@@ -242,6 +242,26 @@ def test_decision_margin_is_the_distance_of_a_steps_jump_from_its_threshold(meth
     assert got == (None if margin is None else pytest.approx(margin, abs=1e-9))
 
 
+@pytest.mark.parametrize("method,n_names,errors", [
+    ("bounded", 1, (6.95, 4.78, 4.91)), ("bounded", 1, (6.95, 4.78, 4.75)),
+    ("simplex", 3, (3.0, 3.0, 3.0, 3.0)), ("simplex", 2, (9.0, 5.0, 7.0)),
+])
+def test_the_screen_stops_a_search_exactly_when_its_decision_margin_is_negative(method, n_names,
+                                                                               errors):
+    """The screen and the margin read the same first evaluations (hcal.screen_size): a search
+    the screen ends has a negative margin, one it lets run a positive margin."""
+    tie = 2.18
+    n_first = hcal.screen_size(method, n_names)
+    rows = [((0.0,) * n_names, e) for e in errors[:n_first]]
+    stopped = hcal.flat_screen(n_first, tie)(rows) is not None
+    assert stopped == (hcal.decision_margin(method, errors, n_names, tie) < 0.0)
+
+
+def test_screen_size_refuses_a_pick():
+    with pytest.raises(ValueError, match="choice"):
+        hcal.screen_size("choice", 1)
+
+
 def _pick_of(trace, tie, names, penalty=np.inf):
     """The weighted mean of a trace's rows before the last (the pick's own evaluation)."""
     rows = trace.iloc[:-1]

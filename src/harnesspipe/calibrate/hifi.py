@@ -270,6 +270,17 @@ def flat_screen(n_first: int, floor: float, penalty: float = np.inf):
     return stop
 
 
+def screen_size(method: str, n_names: int) -> int:
+    """How many first evaluations :func:`flat_screen` looks at in a search of ``n_names``
+    parameters: the start and Brent's two golden-section points (``bounded``, 3), or the
+    +5 % simplex (``simplex``, ``n_names`` + 1)."""
+    if method == "bounded":
+        return 3
+    if method == "simplex":
+        return n_names + 1
+    raise ValueError(f"screen_size: method {method!r} is not bounded|simplex")
+
+
 def decision_margin(method: str, errors, n_names: int, tie: float,
                     penalty: float = np.inf) -> float | None:
     """Signed distance [N] of a fit step's threshold decision from its threshold ``tie`` (the
@@ -289,7 +300,7 @@ def decision_margin(method: str, errors, n_names: int, tie: float,
         if len(errors) < 2 or not np.all(errors < penalty):
             return None
         return float(errors[0] - errors[1:].min() - tie)
-    n_first = n_names + 1 if method == "simplex" else 3      # as the steps' flat_screen
+    n_first = screen_size(method, n_names)
     first = errors[:n_first]
     if len(first) < n_first or not np.all(first < penalty):
         return None

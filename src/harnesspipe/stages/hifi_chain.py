@@ -411,13 +411,13 @@ def _search(step, settings, objective, names, fixed, live, key, floor):
             raise ConfigError(f"hifi fit {step}: a bounded search fits one parameter, not {names}")
         return hcal.bounded_fit(objective, names[0], settings["bounds"], xatol=settings["xatol"],
                                 log_path=log, key=key, maxfev=settings["maxfev"],
-                                stop=hcal.flat_screen(3, floor, objective.penalty),
+                                stop=_screen(settings, names, floor, objective),
                                 keep=float(fixed[names[0]]), tie=floor,
                                 penalty=objective.penalty)
     if settings["method"] == "simplex":
         return hcal.simplex_fit(objective, {k: fixed[k] for k in names}, xatol=settings["xatol"],
                                 fatol=settings["fatol"], maxfev=settings["maxfev"], log_path=log, key=key,
-                                stop=hcal.flat_screen(len(names) + 1, floor, objective.penalty),
+                                stop=_screen(settings, names, floor, objective),
                                 keep_start=True, tie=floor, penalty=objective.penalty)
     if settings["method"] == "choice":
         if len(names) != 1:
@@ -425,6 +425,12 @@ def _search(step, settings, objective, names, fixed, live, key, floor):
         return hcal.choice_fit(objective, names[0], settings["choices"], keep=float(fixed[names[0]]),
                                tie=floor, log_path=log, key=key, penalty=objective.penalty)
     raise ConfigError(f"hifi fit {step}: method {settings['method']!r} is not bounded|simplex|choice")
+
+
+def _screen(settings, names, floor, objective):
+    """The search's identifiability screen over its first evaluations (:func:`hcal.screen_size`,
+    the count :func:`hcal.decision_margin` reads its margin from)."""
+    return hcal.flat_screen(hcal.screen_size(settings["method"], len(names)), floor, objective.penalty)
 
 
 ONSET_FRACTION = 0.5   # ties below this fraction of delta0 at the start: cohesion is inert
