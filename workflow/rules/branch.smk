@@ -117,7 +117,7 @@ rule branch_hifi:
         settings=lambda wc: SETTINGS.branch_hifi(config, PROFILE),
         code=BRANCH_HIFI_CODE,
     threads: 1
-    priority: 2              # the run's longest one-thread job (12.5 min at default) first, beside the chain's one-thread fabric fits, before the virtual tests (1-1.1): at priority 0 it ran last and alone for 12.5 of the default run's 68 min (bench/RESULTS.md 'Pipeline (default)')
+    priority: 2              # the run's longest one-thread job (6.5 min at default) first, beside the chain's one-thread fabric fits, before the virtual tests (1-1.1): at priority 0 it ran last and alone (12.5 of a 68 min default run on a slower machine; bench/RESULTS.md 'Pipeline (default)')
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage branch-hifi --settings '{params.settings}' "
         "--coverings {input.table2} --outdir {RES}/branch/hifi > {log} 2>&1"

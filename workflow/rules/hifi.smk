@@ -2,12 +2,13 @@
 #   hifi_crosscheck_all: every Table 3 case at the PAPER's Table 2 and interface values, then
 #       eq. 13 + simplex on each curve -> results/hifi/crosscheck/table3.csv beside the paper's;
 #   hifi_chain_all: the Sec. 4.2 calibration chain against the measured means (the build state,
-#       then mu_rtb -> mu_rtp -> cohesive -> E2/E1; the steps: stages/chain_settings.STEPS)
+#       then mu_rtb -> mu_rtp -> cohesive -> the fabric CWB's end bands -> E2/E1; the steps:
+#       stages/chain_settings.STEPS)
 #       -> results/hifi/interface.csv, then the virtual test of every case (incl.
 #       hifi.extra_cases) at the fitted interface.
 # `all` includes the groups named in hifi.pipeline.in_all (stages/targets.py; the chain's fits
 # run on the mesh of hifi.pipeline.chain_profile, the virtual tests on the run's profile;
-# the whole quick pipeline 23-30 min on 2 cores, bench/RESULTS.md; crosscheck: 5 more runs).
+# the whole quick pipeline 23 min on 2 cores, bench/RESULTS.md; crosscheck: 5 more runs).
 # Every virtual test is one thread, so two run side by side; a fit step takes its HIFI_STEPS cores.
 
 from harnesspipe.stages import chain_settings as CHAIN
@@ -119,7 +120,8 @@ rule hifi_crosscheck_table:
 
 
 rule hifi_fit:
-    """One step of the Sec. 4.2 chain (bounded search or Nelder-Mead) on the measured means."""
+    """One step of the Sec. 4.2 chain (bounded search, Nelder-Mead or a pick among a few values)
+    on the measured means."""
     input:
         unpack(hifi_fit_inputs),
     output:

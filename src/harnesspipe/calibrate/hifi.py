@@ -4,7 +4,8 @@ Each fit compares the hi-fi force-deflection curve with the measured mean on a
 deflection window (Sec. 4.2.1: friction on u < 20 mm, cohesive on u > 20 mm) by the
 l2 norm of eq. 4 on the measurement grid.  One parameter is found by a bounded 1-D
 search (Brent's bounded method, ``scipy.optimize.minimize_scalar``), several by the
-paper's Nelder-Mead (:func:`harnesspipe.calibrate.simplex.nelder_mead`).
+paper's Nelder-Mead (:func:`harnesspipe.calibrate.simplex.nelder_mead`); a build input
+that takes one of a few values by a pick (:func:`choice_fit`).
 
 Robustness.  A hi-fi run that fails -- unstable, energy balance lost, KE/IE above
 its limit -- is a *rejected point*: its parameters and reason go to the log and the

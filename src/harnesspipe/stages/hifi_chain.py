@@ -5,7 +5,8 @@
   (``deflection_mm,force_N``), ``summary.json``, ``energies.csv``, ``slip_out.csv``,
   ``shapes/`` and ``shapes.png``; against a measured test also its error (eq. 4).
 * :func:`fit_step` -- one step of the calibration chain of Sec. 4.2: a bounded 1-D
-  search (one parameter) or the paper's Nelder-Mead (several) of the interface on
+  search (one parameter), the paper's Nelder-Mead (several) or a pick among a few values
+  (one) of the interface on
   the measured means of one or two CWBs in a deflection window.  Writes
   ``fit.json``, ``curve.csv`` (``case,displacement_mm,force_N`` at the best point),
   ``trace.h5`` (every evaluation), ``rejected.jsonl`` (failed runs, parameters and
@@ -215,8 +216,8 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
     """One calibration step (see module docstring).
 
     ``settings``: ``names`` (fitted parameters), ``cases``, ``window`` ([lo, hi] mm),
-    ``method`` (``bounded`` | ``simplex``), ``bounds`` (bounded), ``xatol``, ``fatol``
-    (simplex), ``maxfev``, ``start`` (interface values before this step: the config's
+    ``method`` (``bounded`` | ``simplex`` | ``choice``), ``bounds`` (bounded), ``choices``
+    (choice), ``xatol``, ``fatol`` (simplex), ``maxfev``, ``start`` (interface values before this step: the config's
     initial guesses), ``models`` (case -> model config), ``set``, ``flat_factor``
     (optional, 0 if absent: the identifiability screen :func:`hcal.flat_screen` stops a
     search whose first evaluations differ by less than this many times the l2 standard
