@@ -216,7 +216,7 @@ def test_the_report_gives_a_choice_step_its_values_errors_and_why():
            "error_l2": res.fun, "error_rel": 0.1, "nfev": res.nfev, "converged": res.converged,
            "message": res.message, "parameters": res.params(), "choices": [0, 1], "bounds": None}
     text = _step_text(fit, {}, load_config())
-    assert "errors 0: 5.1 N, 1: 3.2 N; end_tape_binds 1 beats the start by more than the standard " \
+    assert "errors 0: 5.1 N, 1: 3.2 N; end_tape_binds 1 beats the start by at least the standard " \
            "error of the measured mean (0.4 N)." in text
     assert "<td>search interval</td><td>one of [0, 1]</td>" in text and "did not converge" not in text
 
@@ -518,29 +518,55 @@ def test_cohesive_simplex_step_on_two_cases(tmp_path, fake):
     assert sorted(pd.read_csv(tmp_path / "cohesive" / "curve.csv")["case"].unique()) == sorted(refs)
 
 
-@pytest.mark.parametrize("separation, inert", [(0.01, True), (0.03, False)])
-def test_cohesive_fit_stops_when_no_tie_reaches_damage_onset(tmp_path, fake, separation, inert):
-    """Ties far below delta0 (0.05) in the first evaluation: one evaluation, start values kept,
-    the reason stated; near onset (0.03 > delta0 / 2) the simplex runs on."""
+SOFT = {"delta0": 0.008, "delta_f": 0.016, "alpha_d": 1.0}   # a truth that debonds early
+
+
+@pytest.mark.parametrize("separation, truth, outcome", [
+    (0.01, {}, "kept"),               # ties below delta0 (0.05); debonding at the probe fits worse
+    (0.01, SOFT, "probed"),           # ... the probe fits better: the search starts there
+    (0.06, {}, "searched"),           # a tie past delta0 at the start: damage acts, search on
+])
+def test_cohesive_fit_asks_the_data_whether_the_ties_debond(tmp_path, fake, separation, truth, outcome):
+    """Ties below delta0 in the first evaluation: the curve cannot depend on delta0, delta_f,
+    alpha there, so the step runs a probe at delta0 = half the largest opening (delta_f at
+    the start's ratio) and keeps the start unless the probe is lower by the tie; a probe
+    that is lower starts the simplex; a tie past delta0 starts the simplex at once.  No
+    evaluation is run twice."""
     u = np.linspace(0.0, 30.0, 101)
-    refs = {c: write_prepared(tmp_path / f"{c}.h5", c, fake.force(u, fake.TRUTH, "closed_tube"), u)
+    truth = {**fake.TRUTH, **truth}
+    refs = {c: write_prepared(tmp_path / f"{c}.h5", c, fake.force(u, truth, "closed_tube"), u, scatter=0.02)
             for c in ("cwb19_t2_closed", "cwb19_t2_open_halflap")}
     model = {"cases": {c: {"covering": "closed_tube"} for c in refs}, "hifi": {}}
     start = {"mu_rtb": 0.3, "mu_rtp": 0.1, "delta0": 0.05, "delta_f": 0.1, "alpha_d": 1.0}
     settings = {"names": ["delta0", "delta_f", "alpha_d"], "cases": list(refs), "window": [20.0, 30.0],
                 "method": "simplex", "bounds": None, "xatol": 1e-3, "fatol": 1e-4, "maxfev": 30,
-                "start": start, "models": {c: model for c in refs},
+                "start": start, "models": {c: model for c in refs}, "flat_factor": 1.0,
                 "set": {"fake_tie_separation": separation}}
     calls = []
     counting = lambda *a: calls.append(a) or runner_of(fake)(*a)  # noqa: E731
     fit = hifi_chain.fit_step("cohesive", settings, refs, tmp_path / "cohesive", runner=counting)
-    assert len(calls) <= 2 * fit["nfev"]          # the probe is the search's first point, not rerun
-    if inert:
-        assert fit["nfev"] == 1 and not fit["converged"]
+    assert len(calls) == 2 * fit["nfev"]          # every evaluation ran once, the probe too
+    if outcome == "kept":
+        assert fit["nfev"] == 2 and not fit["converged"]
         assert fit["parameters"] == {k: start[k] for k in settings["names"]}
         assert "not identifiable" in fit["message"] and "0.01 mm" in fit["message"]
+        assert "delta0 0.005 mm" in fit["message"] and fit["decision"]["margin_N"] < 0.0
+        assert len(hcal_trace(tmp_path / "cohesive" / "trace.h5")) == 2
+    elif outcome == "probed":
+        assert "searched from there" in fit["message"] and fit["nfev"] > 2
+        assert fit["parameters"]["delta0"] < 0.02      # from the probe (0.005), not the start
+        assert hcal_trace(tmp_path / "cohesive" / "trace.h5")["delta0"].iloc[0] == pytest.approx(0.005)
     else:
-        assert fit["nfev"] > 4 and "not identifiable" not in fit["message"]
+        assert fit["nfev"] >= 4 and "damage onset" not in fit["message"]   # the +5 % simplex at least
+        assert hcal_trace(tmp_path / "cohesive" / "trace.h5")["delta0"].iloc[0] == 0.05
+
+
+def hcal_trace(path: Path) -> pd.DataFrame:
+    """A fit's trace.h5 (its evaluations in order) as a frame."""
+    with h5py.File(path, "r") as f:
+        names = [n.decode() if isinstance(n, bytes) else n for n in f.attrs["names"]]
+        x = f["x"][...]
+        return pd.DataFrame({n: x[:, i] for i, n in enumerate(names)} | {"error": f["error"][...]})
 
 
 def test_cohesive_cases_side_by_side_match_serial(tmp_path, fake):

@@ -25,9 +25,9 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from harnesspipe.calibrate.objective import l2_error, on_grid
-from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, best_logged,
-                                           check_stop, logged_call, nelder_mead, rest_at_pick,
-                                           stopped_at)
+from harnesspipe.calibrate.simplex import (EvaluationLog, FitResult, StopSearch, admitted,
+                                           best_logged, check_stop, logged_call, nelder_mead,
+                                           rest_at_pick, stopped_at)
 
 REJECT_FACTOR = 10.0
 #: a simulated curve may end this fraction of the window's end short of it (the feeder stops
@@ -42,6 +42,13 @@ class RejectedRun(RuntimeError):
 def window_mask(u_grid, window) -> np.ndarray:
     lo, hi = window
     return (u_grid >= lo) & (u_grid <= hi)
+
+
+def covered(u_grid, u_sim) -> np.ndarray:
+    """The measured grid points a simulated curve covers: from its first deflection to its
+    last, and up to ``END_TOLERANCE`` of the grid's end beyond it (they take its end value)."""
+    u_grid, u_sim = np.asarray(u_grid, dtype=float), np.asarray(u_sim, dtype=float)
+    return (u_grid >= u_sim.min()) & (u_grid <= u_sim.max() + END_TOLERANCE * max(u_grid.max(), 1e-12))
 
 
 def curve_error(u_sim, f_sim, u_grid, f_exp, window) -> float:
@@ -192,7 +199,7 @@ def bounded_fit(objective, name: str, bounds, *, xatol: float, log_path=None, ke
         res = minimize_scalar(wrapped, bounds=tuple(bounds), method="bounded",
                               options={"xatol": xatol, "maxiter": maxfev})
         x, fun, converged, message = [res.x], float(res.fun), bool(res.success), str(res.message)
-        if tie > 0.0:
+        if tie > 0.0 and admitted([r[1] for r in log.rows], penalty).any():
             x, fun, how = rest_at_pick(log, objective, tie, xatol, penalty=penalty)
             message = f"{message}; {how}"
         elif keep is not None:     # the start, evaluated before Brent, may be the best point
@@ -220,7 +227,7 @@ def choice_fit(objective, name: str, choices, *, keep: float, tie: float, log_pa
     told = errors[best] < penalty and (errors[0] >= penalty or errors[best] <= errors[0] - tie)
     pick = best if told else 0
     listed = ", ".join(f"{v:g}: {e:.4g} N" for v, e in zip(values, errors))
-    how = (f"{name} {values[pick]:g} beats the start by more than the standard error of the "
+    how = (f"{name} {values[pick]:g} beats the start by at least the standard error of the "
            f"measured mean ({tie:.3g} N)" if pick != 0 else
            f"the start {values[0]:g} kept: no other value beats it by the standard error of the "
            f"measured mean ({tie:.3g} N)")
@@ -287,7 +294,7 @@ def decision_margin(method: str, errors, n_names: int, tie: float,
     """Signed distance [N] of a fit step's threshold decision from its threshold ``tie`` (the
     standard error of the measured mean, :func:`flat_screen`'s floor), from the step's
     evaluation errors in logged order.  A pick (``choice``, :func:`choice_fit`): the start's
-    error minus the best other's minus ``tie`` (> 0: the other value is picked).  A search
+    error minus the best other's minus ``tie`` (>= 0: the other value is picked).  A search
     (``bounded``, ``simplex``): the spread of its first evaluations (the start and Brent's two
     golden-section points, or the +5 % simplex) minus ``tie`` (< 0: the screen ends it and the
     start is kept).  Every other outcome of a search moves continuously with the errors

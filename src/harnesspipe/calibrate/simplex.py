@@ -209,16 +209,6 @@ def logged_call(log: EvaluationLog, objective, x: np.ndarray) -> float:
     return err
 
 
-def evaluate_logged(objective, x0, names, *, log_path=None, key="") -> FitResult:
-    """One evaluation at ``x0``, logged (or replayed) as the first row of the log: a
-    :func:`nelder_mead` from ``x0`` on the same log then replays it instead of running it."""
-    x0 = np.asarray(x0, dtype=float)
-    log = EvaluationLog(log_path, names, key)
-    err = logged_call(log, objective, x0)
-    return FitResult(names=list(names), x=x0, fun=err, nfev=1, converged=False,
-                     message="one evaluation", trace=log.frame())
-
-
 def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
                 log_path=None, key="", restarts=0, start_scaling=None,
                 step=SIMPLEX_STEP, stop=None, keep=None, tie: float = 0.0,
@@ -274,7 +264,7 @@ def nelder_mead(objective, x0, names, *, xatol=1e-4, fatol=1e-6, maxfev=200,
             if improved <= fatol:
                 break
         x = z * scale
-        if tie > 0.0:
+        if tie > 0.0 and admitted([r[1] for r in log.rows], penalty).any():
             x, best, how = rest_at_pick(log, objective, tie, xatol, scale, penalty)
             message = f"{message}; {how}"
     except StopSearch as reason:

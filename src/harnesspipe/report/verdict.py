@@ -34,10 +34,13 @@ import pandas as pd
 
 from harnesspipe.calibrate import eq13
 from harnesspipe.calibrate.hardening import N_MAX
+from harnesspipe.calibrate.hifi import covered
 from harnesspipe.calibrate.objective import relative_l2_error
 from harnesspipe.models.free_wires import coupling, free_wire_force
 from harnesspipe.report.names import physical_name
 from harnesspipe.stages.chain_settings import STEPS as CHAIN_STEPS
+from harnesspipe.stages.chain_settings import budget as chain_budget
+from harnesspipe.stages.chain_settings import chain_profile
 from harnesspipe.stages.chain_settings import cases as chain_cases
 from harnesspipe.stages.common import read_fit
 
@@ -165,7 +168,7 @@ def curve_error(curve: pd.DataFrame, prepared) -> float:
     x, F = np.asarray(x, dtype=float), np.asarray(curve["force_N"], dtype=float)
     order = np.argsort(x, kind="stable")
     x, F = x[order], F[order]
-    mask = (prepared.grid >= x[0]) & (prepared.grid <= x[-1] + 1e-9)
+    mask = covered(prepared.grid, x)
     return relative_l2_error(prepared.mean[mask], np.interp(prepared.grid[mask], x, F))
 
 
@@ -175,7 +178,7 @@ def force_ratio(curve: pd.DataFrame, prepared) -> float:
     x = curve["deflection_mm"] if "deflection_mm" in curve else curve["displacement_mm"]
     x, F = np.asarray(x, dtype=float), np.asarray(curve["force_N"], dtype=float)
     order = np.argsort(x, kind="stable")
-    mask = (prepared.grid >= x[order][0]) & (prepared.grid <= x[order][-1] + 1e-9)
+    mask = covered(prepared.grid, x)
     return float(np.interp(prepared.grid[mask], x[order], F[order]).sum() / prepared.mean[mask].sum())
 
 
@@ -197,7 +200,7 @@ def couplings(curve: pd.DataFrame, prepared, cfg: dict, case: str) -> tuple[floa
     return tuple(float(c) for c in coupling(F, np.repeat(F_free, 2)))
 
 
-def _row(stage, item, name, value, fit, cfg, *, paper, truth, error, error_of, goal, bounds, atol,
+def _row(stage, item, name, value, fit, *, paper, truth, error, error_of, goal, bounds, atol,
          spread=0.0, screened=False) -> Row:
     se, source = _standard_error(fit, name) if fit is not None else (None, "")
     rep = (fit or {}).get("standard_error") or {}
@@ -212,8 +215,8 @@ def _row(stage, item, name, value, fit, cfg, *, paper, truth, error, error_of, g
 
 
 def _hardening_atol(name: str, paper: dict | None):
-    """Tolerance of the hardening law's admissible set: the width for n in (0, N_MAX];
-    BOUND_TOL of the paper's value for (0, inf) (None without a paper value)."""
+    """Tolerance of the hardening law's admissible set: BOUND_TOL of the width for n in
+    (0, N_MAX]; BOUND_TOL of the paper's value for (0, inf) (None without a paper value)."""
     lo, hi = HARDENING_BOUNDS[name]
     if math.isfinite(hi):
         return BOUND_TOL * (hi - lo)
@@ -229,7 +232,7 @@ def tensile_rows(paths, cfg: dict, truth: dict) -> list[Row]:
         tr = truth.get(fit["test_id"], {}).get("parameters", {})
         for name, value in fit["parameters"].items():
             bounds = HARDENING_BOUNDS.get(name)
-            rows.append(_row("tensile", fit["item"], name, value, fit, cfg,
+            rows.append(_row("tensile", fit["item"], name, value, fit,
                              paper=(paper or {}).get(name), truth=tr.get(name),
                              error=float(fit["error_rel"]), error_of=f"test {fit['test_id']}",
                              goal=_goal(cfg, "calibration"), bounds=bounds,
@@ -287,7 +290,7 @@ def rom_rows(paths, cfg: dict, truth: dict, results: Path, measured: dict) -> li
         tr = truth.get(test_id, {}).get("parameters", {})
         for name, value in fit["parameters"].items():
             bounds = HARDENING_BOUNDS.get(name)
-            rows.append(_row("rom", fit["item"], name, value, fit, cfg, paper=(paper or {}).get(name),
+            rows.append(_row("rom", fit["item"], name, value, fit, paper=(paper or {}).get(name),
                              truth=tr.get(name), error=err["test"], error_of=f"test {test_id}",
                              goal=err["goal"], spread=err["spread"], bounds=bounds,
                              atol=_hardening_atol(name, paper) if bounds else None))
@@ -326,7 +329,7 @@ def hifi_rows(results: Path, cfg: dict) -> list[Row]:
         bounds = tuple(fit["bounds"]) if fit.get("bounds") else None
         atol = max(BOUND_TOL * (bounds[1] - bounds[0]), float(pipe["bounded_xatol"])) if bounds else None
         for name, value in fit["parameters"].items():
-            rows.append(_row("hifi", fit["item"], name, value, None, cfg, paper=paper.get(name), truth=None,
+            rows.append(_row("hifi", fit["item"], name, value, None, paper=paper.get(name), truth=None,
                              error=error, error_of=f"virtual test {worst}" if worst else "",
                              goal=_goal(cfg, "calibration"), spread=hifi_spread(cfg), bounds=bounds,
                              atol=atol, screened=screened))
@@ -346,7 +349,7 @@ def branch_rows(paths, cfg: dict, truth: dict) -> list[Row]:
             continue
         tr = truth.get(fit["test_id"], {}).get("parameters", {})
         for name, value in fit["parameters"].items():
-            rows.append(_row("branch", "Y harness", name, value, fit, cfg,
+            rows.append(_row("branch", "Y harness", name, value, fit,
                              paper=cfg["paper"].get("damping", {}).get(name), truth=tr.get(name),
                              error=float(fit["error_rel"]), error_of=f"test {fit['test_id']}",
                              goal=_goal(cfg, "calibration"), bounds=bounds, atol=atol))
@@ -456,9 +459,8 @@ def hifi_fidelity(results: Path, cfg: dict, measured: dict) -> list[dict]:
 def chain_mesh(cfg: dict) -> str | None:
     """The profile whose mesh the chain's fits ran on, when it is not the run's own
     (``hifi.pipeline.chain_profile``), else None."""
-    profile = cfg.get("profile", "default")
-    chain = cfg.get("hifi", {}).get("pipeline", {}).get("chain_profile") or profile
-    return None if chain == profile else chain
+    chain = chain_profile(cfg)
+    return None if chain == cfg["profile"] else chain
 
 
 def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: dict,
@@ -468,7 +470,7 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
     out = []
     profile = cfg.get("profile", "default")
     chain = chain_mesh(cfg)
-    budget = cfg["hifi"]["pipeline"]["budgets"].get(chain or profile, {})
+    budget = chain_budget(cfg)
     searches = (f"hi-fi searches stop after {budget['bounded_maxfev']} (bounded) or "
                 f"{budget['simplex_maxfev']} (simplex) evaluations" if budget else "")
     if profile != "default":

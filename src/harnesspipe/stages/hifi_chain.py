@@ -46,7 +46,7 @@ import pandas as pd
 
 from harnesspipe.calibrate import hifi as hcal
 from harnesspipe.calibrate.objective import l2_error, objective_key, relative_l2_error
-from harnesspipe.calibrate.simplex import evaluate_logged
+from harnesspipe.calibrate.simplex import EvaluationLog, FitResult, logged_call
 from harnesspipe.config import ConfigError
 from harnesspipe.stages.chain_settings import BUILD   # build-state inputs a chain step may fit
 from harnesspipe.stages.common import read_fit, write_csv, write_fit, write_json
@@ -110,7 +110,7 @@ def curve_vs_measured(curve: pd.DataFrame, prepared) -> dict:
     order = np.argsort(u, kind="stable")
     u, F = u[order], F[order]
     grid = prepared.grid
-    mask = (grid >= u[0]) & (grid <= u[-1] + hcal.END_TOLERANCE * max(grid.max(), 1e-12))
+    mask = hcal.covered(grid, u)
     f = np.interp(grid[mask], u, F)
     return {"test_id": prepared.test_id, "error_l2": l2_error(prepared.mean[mask], f),
             "error_rel": relative_l2_error(prepared.mean[mask], f),
@@ -127,7 +127,11 @@ def run_case(case: str, settings: dict, outdir: Path, *, table2: Path | None = N
     interface = dict(settings.get("interface", {}))
     source = "settings"
     if interface_fit is not None:
-        interface.update(read_fit(interface_fit)["interface"])
+        fit = read_fit(interface_fit)
+        if "interface" not in fit:
+            raise ConfigError(f"--interface {interface_fit}: no 'interface' in it (not the fit.json "
+                              "of a hi-fi chain step)")
+        interface.update(fit["interface"])
         source = str(interface_fit)
     overrides = settings.get("set", {})
     key = run_key(settings["model"], interface, overrides, table2)
@@ -135,8 +139,9 @@ def run_case(case: str, settings: dict, outdir: Path, *, table2: Path | None = N
                "coverings_source": str(table2) if table2 else "paper (config paper.table2)"}
     earlier = _reusable(reuse, key)
     if earlier is not None:
-        curve = pd.read_csv(Path(reuse) / "curve.csv")
-        summary.update({**earlier, **summary, "reused_from": str(reuse)})
+        stored = StoredRun.load(Path(reuse), earlier)
+        curve = stored.curve
+        summary.update({**stored.summary, **summary})
     else:
         run = _run(settings, case, interface, table2, runner)
         curve = run.curve
@@ -199,7 +204,9 @@ def _live_rejected(path: Path, key: str) -> None:
     """Keep only the rejected points of this objective (another key: a stale log)."""
     rows = hcal.read_rejected(path, key)
     if path.exists():
-        path.write_text("".join(json.dumps(r) + "\n" for r in rows))
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text("".join(json.dumps(r) + "\n" for r in rows))
+        tmp.replace(path)
 
 
 def _copy_atomic(src: Path, dst: Path) -> None:
@@ -249,7 +256,8 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
     coverings_text = Path(table2).read_text() if table2 else "paper"
     key = objective_key(np.concatenate([refs[c].grid for c in cases]),
                         np.concatenate([refs[c].mean for c in cases]),
-                        {"step": step, "settings": settings, "fixed": fixed, "coverings": coverings_text})
+                        {"step": step, "settings": {k: v for k, v in settings.items() if k != "bits_spread"},
+                         "fixed": fixed, "coverings": coverings_text})
 
     runs: dict = {}
     simulate = CaseRun(settings, table2, runner,
@@ -260,22 +268,22 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
         objective = hcal.HifiObjective(simulate, targets, fixed, names, rejected_log=rejected_live, key=key,
                                        pool=pool, on_run=lambda c, p, run: runs.update({(c, _pkey(p)): run}))
         t0 = time.perf_counter()
-        res = _inert_cohesion(step, settings, objective, names, fixed, live, key, runs, cases)
         tie = _mean_uncertainty(refs, window) * float(settings.get("flat_factor", 0.0))
+        onset = _onset_check(settings, objective, names, fixed, live, key, _RunsAt(runs, simulate), tie)
+        res = onset.result
         if res is None:
-            res = _search(step, settings, objective, names, fixed, live, key, tie)
+            res = _search(step, settings, objective, names, onset.start, live, key, tie)
+            res.message, res.nfev = onset.words + res.message, res.nfev + onset.evaluations
     best = objective.params(res.x)
     rejected_keys = {_pkey(r["parameters"]) for r in hcal.read_rejected(rejected_live, key)}
-    if not np.isfinite(res.fun) or _pkey(best) in rejected_keys:
+    if not res.fun < objective.penalty or _pkey(best) in rejected_keys:
         raise hcal.RejectedRun(f"hifi fit {step}: the best point is a rejected one: no evaluation "
                                f"succeeded (see {rejected_live})")
     # the best point's runs: kept from this process, else (replayed evaluations) run again
-    curves, per_case, reruns = [], {}, 0
+    curves, per_case = [], {}
+    runs_at = _RunsAt(runs, simulate)
     for case in cases:
-        run = runs.get((case, _pkey(best)))
-        if run is None:
-            reruns += 1
-            run = simulate(case, best)[2]
+        run = runs_at(case, best)
         err = hcal.curve_error(run.curve["deflection_mm"], run.curve["force_N"], refs[case].grid,
                                refs[case].mean, window)
         per_case[case] = {"test_id": refs[case].test_id, "error_l2_window": err,
@@ -294,12 +302,12 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
     _copy_atomic(rejected_live, outdir / "rejected.jsonl")
     norm = sum(float(np.linalg.norm(F[hcal.window_mask(u, w)])) for _, u, F, w in targets)
     trace = res.trace
-    decision = _decision(settings, trace, len(names), tie, objective.penalty, norm)
+    decision = _decision(onset.method, settings, trace, len(names), tie, objective.penalty, norm)
     if decision["marginal"]:
         res.message += (f"; marginal: this decision lies {abs(decision['margin_N']):.3g} N from its "
                         f"threshold, within the runs' last-bits spread ({decision['bits_spread_N']:.3g} N): "
                         "on another machine it may go the other way")
-    reused = sum(isinstance(r, StoredRun) for r in runs.values())
+    reused = sum(isinstance(r, StoredRun) for k, r in runs.items() if k not in runs_at.made)
     path = write_fit(
         outdir, stage="hifi", item=step, test_id=",".join(refs[c].test_id for c in cases),
         parameters={k: best[k] for k in names}, error_l2=res.fun, error_rel=res.fun / max(norm, 1e-300),
@@ -308,8 +316,8 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                "bounds": settings.get("bounds"), "choices": settings.get("choices"),
                "interface": {**NEUTRAL, **best}, "priors": prior_ids,
                "per_case": per_case, "message": res.message, "decision": decision,
-               "hifi_runs": int(len(trace) * len(cases) + reruns),   # upper bound: a rejection stops early
-               "hifi_runs_this_process": int(objective.n_runs + reruns - reused),
+               "hifi_runs": int(len(trace) * len(cases) + runs_at.fresh),   # upper bound: a rejection stops early
+               "hifi_runs_this_process": int(objective.n_runs + runs_at.fresh - reused),
                "hifi_runs_reused": int(reused),
                "hifi_wall_s": float(np.nansum(trace["wall_s"])) if len(trace) else 0.0,
                "rejected": len(hcal.read_rejected(rejected_live, key)),
@@ -383,14 +391,15 @@ def _mean_uncertainty(refs: dict, window) -> float:
                for r in refs.values())
 
 
-def _decision(settings: dict, trace: pd.DataFrame, n_names: int, tie: float, penalty: float,
-              norm: float) -> dict:
-    """The step's threshold decision (:func:`hcal.decision_margin`) against the runs' last-bits
+def _decision(method: str, settings: dict, trace: pd.DataFrame, n_names: int, tie: float,
+              penalty: float, norm: float) -> dict:
+    """The step's threshold decision (:func:`hcal.decision_margin`, ``method`` the rule that
+    made it: the step's own, or ``choice`` for the cohesive step's onset pick) against the runs' last-bits
     spread, ``bits_spread`` x the measured means' l2 norm over the window (config
     ``hifi.pipeline.fidelity_spread``: five last-bit copies of one run spread by 0.66 % of it):
     ``marginal`` when the margin is smaller."""
     errors = trace["error"].to_numpy(float) if len(trace) else np.zeros(0)
-    margin = hcal.decision_margin(settings["method"], errors, n_names, tie, penalty)
+    margin = hcal.decision_margin(method, errors, n_names, tie, penalty)
     spread = float(settings.get("bits_spread", 0.0)) * norm
     return {"margin_N": margin, "bits_spread_N": spread, "threshold_N": tie,
             "marginal": margin is not None and abs(margin) < spread}
@@ -434,31 +443,89 @@ def _screen(settings, names, floor, objective):
     return hcal.flat_screen(hcal.screen_size(settings["method"], len(names)), floor, objective.penalty)
 
 
-ONSET_FRACTION = 0.5   # ties below this fraction of delta0 at the start: cohesion is inert
+ONSET_PROBE = 0.5   # the debonding probe's delta0: this fraction of the ties' largest opening
 
 
-def _inert_cohesion(step, settings, objective, names, fixed, live, key, runs, cases):
-    """The cohesive fit's first evaluation alone (logged like any other), and its result if
-    no cohesive tie of any case's run came near damage onset -- largest separation below
-    ``ONSET_FRACTION`` x delta0 (run summary ``tie_separation_max_mm``).  Below onset the
-    cohesive law is its linear elastic part (eqs. 7-8) whatever delta0, delta_f and alpha:
-    the curve does not depend on them, and the simplex (first moves +-5 %) could only reach
-    damage by halving delta0.  The parameters then stay at their start values, the fit says
-    why, and the rest of the search is not run.  None: cohesion acts, search on."""
+class _RunsAt:
+    """``(case, params) -> run`` from the fit's runs, else run (:class:`CaseRun`) and kept;
+    ``made``: the keys run here, ``fresh``: how many of them were run, not taken."""
+
+    def __init__(self, runs: dict, simulate):
+        self.runs, self.simulate, self.made, self.fresh = runs, simulate, set(), 0
+
+    def __call__(self, case: str, params: dict):
+        k = (case, _pkey(params))
+        if k not in self.runs:
+            run = self.simulate(case, params)[2]
+            self.runs[k], self.fresh = run, self.fresh + (not isinstance(run, StoredRun))
+            self.made.add(k)
+        return self.runs[k]
+
+
+@dataclass
+class _Onset:
+    """Where the cohesive fit stands after its onset check (:func:`_onset_check`)."""
+    result: FitResult | None     # the step's result when the check ends it
+    start: dict                  # else the search's start
+    method: str                  # the rule of the step's threshold decision
+    words: str = ""              # what the check found, for the search's message
+    evaluations: int = 0         # its evaluations not in the search's log
+
+
+def _onset_check(settings, objective, names, fixed, live, key, runs_at, tie) -> _Onset:
+    """Whether the cohesive fit's search can start where it is (eqs. 7-9).
+
+    Its first evaluation, at the start values, shows how far the tape ties open (run summary
+    ``tie_separation_max_mm``, the largest over the cases).  A tie at or past delta0: damage
+    acts, and the simplex searches from the start like any step.  All below: every tie
+    stays on the law's linear elastic part whatever delta0, delta_f and alpha, so the curve
+    does not depend on them there and the simplex's +5 % moves could only find that.  The
+    data are asked instead whether the tape should debond: a probe with delta0 at
+    ``ONSET_PROBE`` x that opening (the most opened ties pass onset twice over; delta_f at
+    the start's ratio to delta0, alpha as started) against the start, by the pick rule of
+    :func:`hcal.choice_fit` (lower by at least ``tie``).  Not lower: the step ends, the
+    start values kept, the two errors in its message.  Lower: the simplex searches from the
+    probe.  Both evaluations are logged (``onset.h5``) and replayed on a rerun."""
     if settings["method"] != "simplex" or "delta0" not in names:
-        return None
-    res = evaluate_logged(objective, [fixed[k] for k in names], names,
-                          log_path=live / "evaluations.h5", key=key)
-    seps = [getattr(runs.get((c, _pkey(objective.params(res.x)))), "summary", {}).get(
-        "tie_separation_max_mm") for c in cases]
-    if any(s is None for s in seps) or max(seps) >= ONSET_FRACTION * fixed["delta0"]:
-        return None
-    res.message = (f"not identifiable: no cohesive tie reaches damage onset (largest separation "
-                   f"{max(seps):.3g} mm < {ONSET_FRACTION:g} delta0 = "
-                   f"{ONSET_FRACTION * fixed['delta0']:.3g} mm in every case); the tape stays "
-                   f"bonded, so delta0, delta_f and alpha keep their start values")
-    res.converged = False
-    return res
+        return _Onset(None, fixed, settings["method"])
+    onset = EvaluationLog(live / "onset.h5", names, key)
+    x0 = np.array([fixed[k] for k in names], dtype=float)
+    e0 = logged_call(onset, objective, x0)
+    cases = [c for c, *_ in objective.targets]
+    seps = [] if e0 >= objective.penalty else \
+        [runs_at(c, objective.params(x0)).summary.get("tie_separation_max_mm") for c in cases]
+    if not seps or any(v is None for v in seps) or max(seps) >= fixed["delta0"]:
+        _seed(live / "evaluations.h5", names, key, onset.rows[0])    # the search's first point
+        return _Onset(None, fixed, "simplex")
+    opening = max(seps)
+    probe = {k: fixed[k] for k in names}
+    probe["delta0"] = ONSET_PROBE * opening
+    probe["delta_f"] = probe["delta0"] * fixed["delta_f"] / fixed["delta0"]
+    xp = np.array([probe[k] for k in names], dtype=float)
+    ep = logged_call(onset, objective, xp)
+    words = (f"no tape tie reaches damage onset at the start values (largest opening {opening:.3g} mm "
+             f"< delta0 {fixed['delta0']:g} mm), where the curve does not depend on delta0, delta_f "
+             f"and alpha; with the ties debonding (delta0 {probe['delta0']:.3g} mm, delta_f "
+             f"{probe['delta_f']:.3g} mm) the error is {ep:.4g} N against {e0:.4g} N")
+    if ep < objective.penalty and ep <= e0 - tie:
+        _seed(live / "evaluations.h5", names, key, onset.rows[-1])   # the search's first point
+        return _Onset(None, {**fixed, **probe}, "simplex",
+                      f"{words}, lower by at least the standard error of the measured mean "
+                      f"({tie:.3g} N): searched from there; ", evaluations=1)
+    _copy_atomic(live / "onset.h5", live / "evaluations.h5")
+    message = (f"not identifiable: {words}, not lower by the standard error of the measured mean "
+               f"({tie:.3g} N): the data do not call for debonding; the tape stays bonded and "
+               f"delta0, delta_f and alpha keep their start values")
+    return _Onset(FitResult(list(names), x0, e0, len(onset.rows), False, message, onset.frame()),
+                  fixed, "choice")
+
+
+def _seed(path: Path, names, key: str, row) -> None:
+    """Make the evaluation ``row`` (x, error, wall) the first of the log at ``path``, unless it
+    is already, so that a search starting there replays it instead of running it again."""
+    log = EvaluationLog(path, names, key)
+    if log.lookup(row[0]) is None:
+        log.append(*row)
 
 
 def _pkey(params: dict) -> tuple:
@@ -498,13 +565,15 @@ def _rom_simulate(params, settings):
     return rom_fit.simulate(params, settings)
 
 
-def resample(curve: pd.DataFrame, deflection: float, n: int = N_GRID) -> tuple[np.ndarray, np.ndarray]:
-    """A hi-fi curve on the uniform grid 0..deflection (as the prepared tests)."""
+def resample(curve: pd.DataFrame, deflection: float, n: int = N_GRID,
+             source: str = "hi-fi curve") -> tuple[np.ndarray, np.ndarray]:
+    """A hi-fi curve on the uniform grid 0..deflection (as the prepared tests); ``source``
+    names it in the error."""
     u, F = curve["deflection_mm"].to_numpy(float), curve["force_N"].to_numpy(float)
     order = np.argsort(u, kind="stable")
     u, F = u[order], F[order]
     if u[-1] < (1.0 - hcal.END_TOLERANCE) * deflection:
-        raise RuntimeError(f"hi-fi curve ends at {u[-1]:.4g} mm, short of the {deflection:g} mm test")
+        raise RuntimeError(f"{source} ends at {u[-1]:.4g} mm, short of the {deflection:g} mm test")
     grid = np.linspace(0.0, deflection, n)
     return grid, np.interp(grid, u, F)
 
@@ -515,7 +584,7 @@ def rom_crosscheck(case: str, curve_csv: Path, settings: dict, outdir: Path,
     from harnesspipe.report import plots
     outdir = Path(outdir)
     hifi = pd.read_csv(curve_csv)
-    grid, F = resample(hifi, settings["three_point"]["deflection"])
+    grid, F = resample(hifi, settings["three_point"]["deflection"], source=str(curve_csv))
     t0 = time.perf_counter()
     result = _rom_fit(grid, F, settings, outdir / "trace.h5")
     curve = _rom_simulate(result.parameters, settings).rename(columns={"deflection_mm": "displacement_mm"})

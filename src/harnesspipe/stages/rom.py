@@ -35,7 +35,7 @@ def reference_curve(path: Path, settings: dict):
     if kind == "hifi":
         from harnesspipe.stages.hifi_chain import resample
         curve = pd.read_csv(path)
-        grid, F = resample(curve, settings["three_point"]["deflection"])
+        grid, F = resample(curve, settings["three_point"]["deflection"], source=str(path))
         return grid, np.asarray(F, dtype=float)[None, :], f"hifi:{path.parent.name}", curve
     ref = read_prepared(path)
     u, F = ref.rows()
