@@ -269,7 +269,8 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                                        pool=pool, on_run=lambda c, p, run: runs.update({(c, _pkey(p)): run}))
         t0 = time.perf_counter()
         tie = _mean_uncertainty(refs, window) * float(settings.get("flat_factor", 0.0))
-        onset = _onset_check(settings, objective, names, fixed, live, key, _RunsAt(runs, simulate), tie)
+        runs_at = _RunsAt(runs, simulate)     # the fit's runs, and those run outside its search
+        onset = _onset_check(settings, objective, names, fixed, live, key, runs_at, tie)
         res = onset.result
         if res is None:
             res = _search(step, settings, objective, names, onset.start, live, key, tie)
@@ -281,7 +282,6 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                                f"succeeded (see {rejected_live})")
     # the best point's runs: kept from this process, else (replayed evaluations) run again
     curves, per_case = [], {}
-    runs_at = _RunsAt(runs, simulate)
     for case in cases:
         run = runs_at(case, best)
         err = hcal.curve_error(run.curve["deflection_mm"], run.curve["force_N"], refs[case].grid,
