@@ -546,19 +546,20 @@ def test_cohesive_fit_asks_the_data_whether_the_ties_debond(tmp_path, fake, sepa
     counting = lambda *a: calls.append(a) or runner_of(fake)(*a)  # noqa: E731
     fit = hifi_chain.fit_step("cohesive", settings, refs, tmp_path / "cohesive", runner=counting)
     assert len(calls) == 2 * fit["nfev"]          # every evaluation ran once, the probe too
+    trace = hcal_trace(tmp_path / "cohesive" / "trace.h5")
+    assert len(trace) == fit["nfev"] and fit["hifi_runs"] == len(calls)   # each one recorded and counted
+    assert trace["delta0"].iloc[0] == 0.05          # the start first
     if outcome == "kept":
         assert fit["nfev"] == 2 and not fit["converged"]
         assert fit["parameters"] == {k: start[k] for k in settings["names"]}
         assert "not identifiable" in fit["message"] and "0.01 mm" in fit["message"]
         assert "delta0 0.005 mm" in fit["message"] and fit["decision"]["margin_N"] < 0.0
-        assert len(hcal_trace(tmp_path / "cohesive" / "trace.h5")) == 2
     elif outcome == "probed":
         assert "searched from there" in fit["message"] and fit["nfev"] > 2
         assert fit["parameters"]["delta0"] < 0.02      # from the probe (0.005), not the start
-        assert hcal_trace(tmp_path / "cohesive" / "trace.h5")["delta0"].iloc[0] == pytest.approx(0.005)
+        assert trace["delta0"].iloc[1] == pytest.approx(0.005)    # then the search from the probe
     else:
         assert fit["nfev"] >= 4 and "damage onset" not in fit["message"]   # the +5 % simplex at least
-        assert hcal_trace(tmp_path / "cohesive" / "trace.h5")["delta0"].iloc[0] == 0.05
 
 
 def hcal_trace(path: Path) -> pd.DataFrame:

@@ -38,7 +38,7 @@ import shutil
 import threading
 import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -274,7 +274,7 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
         res = onset.result
         if res is None:
             res = _search(step, settings, objective, names, onset.start, live, key, tie)
-            res.message, res.nfev = onset.words + res.message, res.nfev + onset.evaluations
+            res.message, res.nfev = onset.words + res.message, res.nfev + len(onset.extra)
     best = objective.params(res.x)
     rejected_keys = {_pkey(r["parameters"]) for r in hcal.read_rejected(rejected_live, key)}
     if not res.fun < objective.penalty or _pkey(best) in rejected_keys:
@@ -298,10 +298,10 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
         c = run.curve.rename(columns={"deflection_mm": "displacement_mm"})[["displacement_mm", "force_N"]]
         curves.append(c.assign(case=case)[["case", "displacement_mm", "force_N"]])
     curve = pd.concat(curves, ignore_index=True)
-    _copy_atomic(live / "evaluations.h5", outdir / "trace.h5")
+    trace = res.trace
+    _write_trace(outdir / "trace.h5", live / "evaluations.h5", trace, key, onset.extra)
     _copy_atomic(rejected_live, outdir / "rejected.jsonl")
     norm = sum(float(np.linalg.norm(F[hcal.window_mask(u, w)])) for _, u, F, w in targets)
-    trace = res.trace
     decision = _decision(onset.method, settings, trace, len(names), tie, objective.penalty, norm)
     if decision["marginal"]:
         res.message += (f"; marginal: this decision lies {abs(decision['margin_N']):.3g} N from its "
@@ -316,10 +316,10 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                "bounds": settings.get("bounds"), "choices": settings.get("choices"),
                "interface": {**NEUTRAL, **best}, "priors": prior_ids,
                "per_case": per_case, "message": res.message, "decision": decision,
-               "hifi_runs": int(len(trace) * len(cases) + runs_at.fresh),   # upper bound: a rejection stops early
+               "hifi_runs": int((len(trace) + len(onset.extra)) * len(cases) + runs_at.fresh),   # upper bound: a rejection stops early
                "hifi_runs_this_process": int(objective.n_runs + runs_at.fresh - reused),
                "hifi_runs_reused": int(reused),
-               "hifi_wall_s": float(np.nansum(trace["wall_s"])) if len(trace) else 0.0,
+               "hifi_wall_s": float(np.nansum(trace["wall_s"]) + sum(r[2] for r in onset.extra)),
                "rejected": len(hcal.read_rejected(rejected_live, key)),
                "set": settings.get("set", {})})
     plots.save(plots.hifi_cases_figure({c: refs[c] for c in cases},
@@ -469,7 +469,7 @@ class _Onset:
     start: dict                  # else the search's start
     method: str                  # the rule of the step's threshold decision
     words: str = ""              # what the check found, for the search's message
-    evaluations: int = 0         # its evaluations not in the search's log
+    extra: list = field(default_factory=list)   # its evaluations (x, error, wall) not in the search's log
 
 
 def _onset_check(settings, objective, names, fixed, live, key, runs_at, tie) -> _Onset:
@@ -511,7 +511,7 @@ def _onset_check(settings, objective, names, fixed, live, key, runs_at, tie) -> 
         _seed(live / "evaluations.h5", names, key, onset.rows[-1])   # the search's first point
         return _Onset(None, {**fixed, **probe}, "simplex",
                       f"{words}, lower by at least the standard error of the measured mean "
-                      f"({tie:.3g} N): searched from there; ", evaluations=1)
+                      f"({tie:.3g} N): searched from there; ", extra=onset.rows[:1])
     _copy_atomic(live / "onset.h5", live / "evaluations.h5")
     message = (f"not identifiable: {words}, not lower by the standard error of the measured mean "
                f"({tie:.3g} N): the data do not call for debonding; the tape stays bonded and "
@@ -526,6 +526,23 @@ def _seed(path: Path, names, key: str, row) -> None:
     log = EvaluationLog(path, names, key)
     if log.lookup(row[0]) is None:
         log.append(*row)
+
+
+def _write_trace(path: Path, evaluations: Path, trace: pd.DataFrame, key: str, extra: list) -> None:
+    """The step's ``trace.h5``: its search's log (``evaluations``), preceded by the
+    evaluations made before the search and not in that log (``extra``, rows (x, error,
+    wall); ``trace``: the search's evaluations as a frame), written whole or not at all."""
+    if not extra:
+        _copy_atomic(evaluations, path)
+        return
+    names = [c for c in trace.columns if c not in ("error", "wall_s")]
+    searched = [(r[names].to_numpy(float), r["error"], r["wall_s"]) for _, r in trace.iterrows()]
+    part = path.with_name(path.name + ".part")
+    part.unlink(missing_ok=True)
+    log = EvaluationLog(part, names, key)
+    for row in [*extra, *searched]:
+        log.append(*row)
+    os.replace(part, path)
 
 
 def _pkey(params: dict) -> tuple:
