@@ -241,15 +241,7 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
     live = outdir / "replay"
     live.mkdir(parents=True, exist_ok=True)
     names, cases = list(settings["names"]), list(settings["cases"])
-    fixed = dict(settings["start"])
-    prior_ids = []
-    for p in priors:
-        prior = read_fit(p)
-        fixed.update(prior["parameters"])
-        prior_ids.append({"step": prior["item"], "parameters": prior["parameters"]})
-    missing = [k for k in names if k not in fixed]
-    if missing:   # the simplex starts there; a search the data cannot steer keeps it
-        raise ConfigError(f"hifi fit {step}: no start value for {missing}")
+    fixed, prior_ids = _start_values(step, settings, priors)
     refs = {c: read_prepared(references[c]) for c in cases}
     window = tuple(float(w) for w in settings["window"])
     targets = [(c, refs[c].grid, refs[c].mean, window) for c in cases]
@@ -280,24 +272,7 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
     if not res.fun < objective.penalty or _pkey(best) in rejected_keys:
         raise hcal.RejectedRun(f"hifi fit {step}: the best point is a rejected one: no evaluation "
                                f"succeeded (see {rejected_live})")
-    # the best point's runs: kept from this process, else (replayed evaluations) run again
-    curves, per_case = [], {}
-    for case in cases:
-        run = runs_at(case, best)
-        err = hcal.curve_error(run.curve["deflection_mm"], run.curve["force_N"], refs[case].grid,
-                               refs[case].mean, window)
-        per_case[case] = {"test_id": refs[case].test_id, "error_l2_window": err,
-                          "measured": curve_vs_measured(run.curve, refs[case])}
-        summary = {"case": case, "role": f"calibration ({step})", **run.summary,
-                   "interface": {**NEUTRAL, **best}, "set": settings.get("set", {}),
-                   "run_key": run_key(settings["models"][case], best, settings.get("set", {}), table2)}
-        if isinstance(run, StoredRun):
-            _copy_run(run.folder, outdir / case, summary)
-        else:
-            write_run(run, outdir / case, summary)
-        c = run.curve.rename(columns={"deflection_mm": "displacement_mm"})[["displacement_mm", "force_N"]]
-        curves.append(c.assign(case=case)[["case", "displacement_mm", "force_N"]])
-    curve = pd.concat(curves, ignore_index=True)
+    curve, per_case = _keep_best_runs(step, settings, best, runs_at, refs, window, table2, outdir)
     trace = res.trace
     _write_trace(outdir / "trace.h5", live / "evaluations.h5", trace, key, onset.extra)
     _copy_atomic(rejected_live, outdir / "rejected.jsonl")
@@ -326,6 +301,43 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                                        {c: g for c, g in curve.groupby("case")},
                                        title=f"hi-fi fit {step}", window=window), outdir / "fit.png")
     return read_fit(path)
+
+
+def _start_values(step: str, settings: dict, priors) -> tuple[dict, list]:
+    """The interface where the step starts: the config's start values with the earlier
+    steps' fitted parameters (``priors``, their fit.json) over them; and what each prior gave."""
+    fixed, prior_ids = dict(settings["start"]), []
+    for p in priors:
+        prior = read_fit(p)
+        fixed.update(prior["parameters"])
+        prior_ids.append({"step": prior["item"], "parameters": prior["parameters"]})
+    missing = [k for k in settings["names"] if k not in fixed]
+    if missing:   # the search starts there; a search the data cannot steer keeps it
+        raise ConfigError(f"hifi fit {step}: no start value for {missing}")
+    return fixed, prior_ids
+
+
+def _keep_best_runs(step, settings, best, runs_at, refs, window, table2, outdir):
+    """The best point's run of each case (from this process, else run again: replayed
+    evaluations) kept in ``outdir/<case>`` with its summary; returns the step's curve
+    (``case,displacement_mm,force_N``) and each case's error over ``window``."""
+    curves, per_case = [], {}
+    for case in settings["cases"]:
+        run = runs_at(case, best)
+        err = hcal.curve_error(run.curve["deflection_mm"], run.curve["force_N"], refs[case].grid,
+                               refs[case].mean, window)
+        per_case[case] = {"test_id": refs[case].test_id, "error_l2_window": err,
+                          "measured": curve_vs_measured(run.curve, refs[case])}
+        summary = {"case": case, "role": f"calibration ({step})", **run.summary,
+                   "interface": {**NEUTRAL, **best}, "set": settings.get("set", {}),
+                   "run_key": run_key(settings["models"][case], best, settings.get("set", {}), table2)}
+        if isinstance(run, StoredRun):
+            _copy_run(run.folder, outdir / case, summary)
+        else:
+            write_run(run, outdir / case, summary)
+        c = run.curve.rename(columns={"deflection_mm": "displacement_mm"})[["displacement_mm", "force_N"]]
+        curves.append(c.assign(case=case)[["case", "displacement_mm", "force_N"]])
+    return pd.concat(curves, ignore_index=True), per_case
 
 
 class CaseRun:
