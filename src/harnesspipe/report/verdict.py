@@ -467,10 +467,22 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
                 measured: dict, fidelity: list[dict] | None = None) -> list[str]:
     """Sentences on what not to trust, each produced by a condition on the results;
     ``fidelity``: :func:`hifi_fidelity` when the caller has it already."""
-    out = []
-    profile = cfg.get("profile", "default")
-    chain = chain_mesh(cfg)
-    budget = chain_budget(cfg)
+    fid = hifi_fidelity(results, cfg, measured) if fidelity is None else fidelity
+    out = _profile_limits(cfg) + _fidelity_limits(fid, cfg)
+    out += _mismatch_limits(rows, cfg, covered={"rom"} | ({"hifi"} if fid else set()))
+    out += _rom_limits(rows, fits) + _parameter_limits(rows, cfg) + _fit_limits(fits, results, cfg)
+    out += [s for s in (_quasi_static(results, cfg), _falls(results, cfg, measured)) if s]
+    if truth:
+        out.append("The test data are the synthetic twin, generated from the paper's values "
+                   "(data/experimental/README.md): agreement with the paper's tables is agreement "
+                   "with the generator, not with a laboratory.")
+    return out
+
+
+def _profile_limits(cfg: dict) -> list[str]:
+    """A reduced profile, and a chain run on another profile's mesh and budget."""
+    out, profile = [], cfg.get("profile", "default")
+    chain, budget = chain_mesh(cfg), chain_budget(cfg)
     searches = (f"hi-fi searches stop after {budget['bounded_maxfev']} (bounded) or "
                 f"{budget['simplex_maxfev']} (simplex) evaluations" if budget else "")
     if profile != "default":
@@ -482,7 +494,13 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
                    + (f", with its budget ({searches})," if searches else "")
                    + f" and the virtual tests on the {profile} profile's (hifi.pipeline.chain_profile), "
                    "so a calibration case's error includes the difference between the meshes.")
-    fid = hifi_fidelity(results, cfg, measured) if fidelity is None else fidelity
+    return out
+
+
+def _fidelity_limits(fid: list[dict], cfg: dict) -> list[str]:
+    """The virtual tests that miss their goal (with the coupling the wires see), and those
+    within the run-to-run spread of it (:func:`hifi_fidelity`)."""
+    out = []
     missed = [f for f in fid if f["verdict"] == MISSED]
     if missed:
         ratios = [f["ratio"] for f in missed]
@@ -503,22 +521,38 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
                    "decide met or missed: "
                    + "; ".join(f"{physical_name(f['case'], cfg)} ({100 * f['error']:.1f} % against "
                                f"{_pct(f['goal'])})" for f in near) + ".")
-    covered = {"rom"} | ({"hifi"} if fid else set())      # said above / below by stage
+    return out
+
+
+def _mismatch_limits(rows: list[Row], cfg: dict, covered: set) -> list[str]:
+    """Fits of the stages not ``covered`` by a sentence of their own that miss their test."""
     other = {(r.stage, r.item): r for r in rows if MISMATCH in r.statuses and r.stage not in covered}
-    if other:
-        out.append("The model misses its test by more than the goal for "
-                   + "; ".join(f"{_fit_name(r, cfg)} ({_pct(r.error)} against {_pct(r.goal)})"
-                               for r in other.values())
-                   + ": its fitted values compensate for what the model lacks.")
+    if not other:
+        return []
+    return ["The model misses its test by more than the goal for "
+            + "; ".join(f"{_fit_name(r, cfg)} ({_pct(r.error)} against {_pct(r.goal)})"
+                        for r in other.values())
+            + ": its fitted values compensate for what the model lacks."]
+
+
+def _rom_limits(rows: list[Row], fits: dict) -> list[str]:
+    """The ROM fitted to the virtual tests: how far from them, and from the tests."""
     rom = [r for r in rows if r.stage == "rom"]
     rom_fits = [read_fit(p) for p in fits.get("rom", [])]
-    if rom and any(f["test_id"].startswith("hifi:") for f in rom_fits):
-        errs = sorted({(r.item, r.error) for r in rom if r.error is not None})
-        refs = [float(f["error_rel"]) for f in rom_fits]
-        if errs:
-            out.append(f"The ROM properties (Table 3) are fitted to the hi-fi virtual tests "
-                       f"(rom.reference: hifi), not to the tests: they reproduce the hi-fi curves to "
-                       f"{_span(refs)} but the measured means only to {_span([e for _, e in errs])}.")
+    if not (rom and any(f["test_id"].startswith("hifi:") for f in rom_fits)):
+        return []
+    errs = sorted({(r.item, r.error) for r in rom if r.error is not None})
+    refs = [float(f["error_rel"]) for f in rom_fits]
+    if not errs:
+        return []
+    return [f"The ROM properties (Table 3) are fitted to the hi-fi virtual tests "
+            f"(rom.reference: hifi), not to the tests: they reproduce the hi-fi curves to "
+            f"{_span(refs)} but the measured means only to {_span([e for _, e in errs])}."]
+
+
+def _parameter_limits(rows: list[Row], cfg: dict) -> list[str]:
+    """Parameters on a bound of their search, not determined, or without a standard error."""
+    out = []
     bound = [r for r in rows if ON_BOUND in r.statuses]
     if bound:
         out.append(f"{len(bound)} parameter{'s sit' if len(bound) > 1 else ' sits'} on a bound of "
@@ -533,7 +567,13 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
         stages = list(dict.fromkeys(STAGE_NAMES[r.stage] for r in nose))
         out.append(f"{len(nose)} parameter{'s carry' if len(nose) > 1 else ' carries'} no standard error "
                    f"({', '.join(stages)}): how well the data fix {'them' if len(nose) > 1 else 'it'} is not known.")
-    unconverged = []
+    return out
+
+
+def _fit_limits(fits: dict, results: Path, cfg: dict) -> list[str]:
+    """Residuals beyond the load-cell noise, searches stopped at their evaluation limit, and
+    hi-fi chain decisions within the last-bits spread of their threshold."""
+    out, unconverged, marginal = [], [], []
     for stage, paths in fits.items():
         if stage == "hifi":   # the chain's targets (interface.csv, summaries): its fits follow below
             continue
@@ -548,7 +588,6 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
             if not fit.get("converged", True) and fit.get("role", "calibration") == "calibration":
                 unconverged.append(f"{STAGE_NAMES[stage]} of {physical_name(fit['item'], cfg)} "
                                    f"({fit['nfev']} evaluations)")
-    marginal = []
     for p in sorted((Path(results) / "hifi" / "chain").glob("*/fit.json")):
         fit = read_fit(p)
         if not fit.get("converged", True) and "not identifiable" not in str(fit.get("message", "")):
@@ -561,10 +600,4 @@ def limitations(rows: list[Row], cfg: dict, results: Path, fits: dict, truth: di
     if marginal:
         out.append("Hi-fi chain decisions within the runs' last-bits spread of their threshold "
                    f"(another machine may decide them the other way): {', '.join(marginal)}.")
-    for sentence in (_quasi_static(results, cfg), _falls(results, cfg, measured)):
-        out += [sentence] if sentence else []
-    if truth:
-        out.append("The test data are the synthetic twin, generated from the paper's values "
-                   "(data/experimental/README.md): agreement with the paper's tables is agreement "
-                   "with the generator, not with a laboratory.")
     return out
