@@ -206,6 +206,10 @@ def test_full_cwb_run_closes_the_energy_balance_and_creates_no_energy(cwb_run):
     assert 0.0 < 30.0 - curve["deflection_mm"].iloc[-1] < 0.1
     assert SUMMARY_KEYS <= set(json.loads((out / "summary.json").read_text()))
     assert summary["n_shell_elements"] > 0 and summary["contact_pairs_max"] > 0
+    # the tape ties' opening: a running maximum that ends at the summary's largest separation
+    opening = h["tie_opening_mm"].to_numpy()
+    assert np.all(np.diff(opening) >= 0.0) and opening[0] < opening[-1]
+    assert opening[-1] == pytest.approx(summary["tie_separation_max_mm"], rel=1e-8)   # csv digits
 
 
 def test_full_cwb_run_writes_shapes_and_slip_out(cwb_run):

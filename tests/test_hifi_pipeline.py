@@ -72,6 +72,7 @@ def run(cfg, case, interface, overrides=None):
                "pid": os.getpid()}
     if overrides and "fake_tie_separation" in overrides:
         summary["tie_separation_max_mm"] = float(overrides["fake_tie_separation"])
+        hist["tie_opening_mm"] = float(overrides["fake_tie_separation"]) * u / 30.0   # opening with the stroke
     return FakeRun(pd.DataFrame({"deflection_mm": u, "force_N": F}), hist, summary=summary)
 
 
@@ -528,8 +529,9 @@ SOFT = {"delta0": 0.008, "delta_f": 0.016, "alpha_d": 1.0}   # a truth that debo
 ])
 def test_cohesive_fit_asks_the_data_whether_the_ties_debond(tmp_path, fake, separation, truth, outcome):
     """Ties below delta0 in the first evaluation: the curve cannot depend on delta0, delta_f,
-    alpha there, so the step runs a probe at delta0 = half the largest opening (delta_f at
-    the start's ratio) and keeps the start unless the probe is lower by the tie; a probe
+    alpha there, so the step runs a probe at delta0 = the opening at the window's start, 20 mm
+    (2/3 of the largest here; delta_f at the start's ratio) and keeps the start unless the
+    probe is lower by the tie; a probe
     that is lower starts the simplex; a tie past delta0 starts the simplex at once.  No
     evaluation is run twice."""
     u = np.linspace(0.0, 30.0, 101)
@@ -553,11 +555,11 @@ def test_cohesive_fit_asks_the_data_whether_the_ties_debond(tmp_path, fake, sepa
         assert fit["nfev"] == 2 and not fit["converged"]
         assert fit["parameters"] == {k: start[k] for k in settings["names"]}
         assert "not identifiable" in fit["message"] and "0.01 mm" in fit["message"]
-        assert "delta0 0.005 mm" in fit["message"] and fit["decision"]["margin_N"] < 0.0
+        assert "delta0 0.00667 mm" in fit["message"] and fit["decision"]["margin_N"] < 0.0
     elif outcome == "probed":
         assert "searched from there" in fit["message"] and fit["nfev"] > 2
-        assert fit["parameters"]["delta0"] < 0.02      # from the probe (0.005), not the start
-        assert trace["delta0"].iloc[1] == pytest.approx(0.005)    # then the search from the probe
+        assert fit["parameters"]["delta0"] < 0.02      # from the probe (0.0067), not the start
+        assert trace["delta0"].iloc[1] == pytest.approx(0.01 * 20.0 / 30.0)   # then the search from the probe
     else:
         assert fit["nfev"] >= 4 and "damage onset" not in fit["message"]   # the +5 % simplex at least
 

@@ -134,7 +134,8 @@ class HifiSystem(BundleSystem):
     def observe(self, t) -> dict:
         """History row.  ``force_N`` (feeder), ``roller_force_N`` and ``deflection_mm`` are
         the load cell's MEANS since the previous row (:meth:`Pins.read`); the instantaneous
-        ones are ``force_N_instant`` and ``deflection_mm_end``."""
+        ones are ``force_N_instant`` and ``deflection_mm_end``; ``tie_opening_mm`` is the
+        largest separation any tape tie has reached so far (:meth:`tie_separation_max`)."""
         p = self.pins
         f, u = p.read()
         self.last_force = float(f[p.feeder, 1])
@@ -143,7 +144,7 @@ class HifiSystem(BundleSystem):
                 "roller_force_N": float(-f[:p.feeder, 1].sum()),
                 "force_N_instant": float(p.force[p.feeder, 1]),
                 "plastic": self.plastic_work(), "contacts": self.active,
-                "debonded_ties": self.debonded()}
+                "debonded_ties": self.debonded(), "tie_opening_mm": self.tie_separation_max()}
 
 
 @dataclass
