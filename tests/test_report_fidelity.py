@@ -73,3 +73,7 @@ def test_a_run_block_says_how_far_the_wires_slid_and_whether_a_tie_damaged(tmp_p
     assert _physical_rows(tmp_path, summary)[1][2].startswith("ties damaged (1.7 of the onset delta0), none")
     summary.update(debonded_ties=3)
     assert _physical_rows(tmp_path, summary)[1][2].startswith("3 ties debonded")
+    # with the run's history, the opening once the feeder had reached 20 mm beside it
+    pd.DataFrame({"deflection_mm": [0.0, 10.0, 30.0],
+                  "tie_opening_mm": [0.0, 0.01, 0.05]}).to_csv(tmp_path / "energies.csv", index=False)
+    assert _physical_rows(tmp_path, summary)[1][1] == "0.05 (0.03 at 20 mm)"
