@@ -72,7 +72,8 @@ def run(cfg, case, interface, overrides=None):
                "pid": os.getpid()}
     if overrides and "fake_tie_separation" in overrides:
         summary["tie_separation_max_mm"] = float(overrides["fake_tie_separation"])
-        hist["tie_opening_mm"] = float(overrides["fake_tie_separation"]) * u / 30.0   # opening with the stroke
+        power = float(overrides.get("fake_tie_power", 1.0))      # how late in the stroke the ties open
+        hist["tie_opening_mm"] = float(overrides["fake_tie_separation"]) * (u / 30.0) ** power
     return FakeRun(pd.DataFrame({"deflection_mm": u, "force_N": F}), hist, summary=summary)
 
 
@@ -522,16 +523,19 @@ def test_cohesive_simplex_step_on_two_cases(tmp_path, fake):
 SOFT = {"delta0": 0.008, "delta_f": 0.016, "alpha_d": 1.0}   # a truth that debonds early
 
 
-@pytest.mark.parametrize("separation, truth, outcome", [
-    (0.01, {}, "kept"),               # ties below delta0 (0.05); debonding at the probe fits worse
-    (0.01, SOFT, "probed"),           # ... the probe fits better: the search starts there
-    (0.06, {}, "searched"),           # a tie past delta0 at the start: damage acts, search on
+@pytest.mark.parametrize("separation, power, truth, outcome", [
+    (0.01, 1.0, {}, "kept"),          # ties below delta0 (0.05); debonding at the probe fits worse
+    (0.01, 3.0, {}, "kept"),          # ... ties opening late: the probe's floor, half the largest
+    (0.01, 1.0, SOFT, "probed"),      # the probe fits better: the search starts there
+    (0.06, 1.0, {}, "searched"),      # a tie past delta0 at the start: damage acts, search on
 ])
-def test_cohesive_fit_asks_the_data_whether_the_ties_debond(tmp_path, fake, separation, truth, outcome):
+def test_cohesive_fit_asks_the_data_whether_the_ties_debond(tmp_path, fake, separation, power, truth,
+                                                              outcome):
     """Ties below delta0 in the first evaluation: the curve cannot depend on delta0, delta_f,
     alpha there, so the step runs a probe at delta0 = the opening at the window's start, 20 mm
-    (2/3 of the largest here; delta_f at the start's ratio) and keeps the start unless the
-    probe is lower by the tie; a probe
+    (2/3 of the largest for ties opening in step with the stroke; half the largest at least,
+    for ties opening late: 0.3 of it at 20 mm), delta_f at the start's ratio, and keeps the
+    start unless the probe is lower by the tie; a probe
     that is lower starts the simplex; a tie past delta0 starts the simplex at once.  No
     evaluation is run twice."""
     u = np.linspace(0.0, 30.0, 101)
@@ -543,7 +547,7 @@ def test_cohesive_fit_asks_the_data_whether_the_ties_debond(tmp_path, fake, sepa
     settings = {"names": ["delta0", "delta_f", "alpha_d"], "cases": list(refs), "window": [20.0, 30.0],
                 "method": "simplex", "bounds": None, "xatol": 1e-3, "fatol": 1e-4, "maxfev": 30,
                 "start": start, "models": {c: model for c in refs}, "flat_factor": 1.0,
-                "set": {"fake_tie_separation": separation}}
+                "set": {"fake_tie_separation": separation, "fake_tie_power": power}}
     calls = []
     counting = lambda *a: calls.append(a) or runner_of(fake)(*a)  # noqa: E731
     fit = hifi_chain.fit_step("cohesive", settings, refs, tmp_path / "cohesive", runner=counting)
@@ -555,7 +559,8 @@ def test_cohesive_fit_asks_the_data_whether_the_ties_debond(tmp_path, fake, sepa
         assert fit["nfev"] == 2 and not fit["converged"]
         assert fit["parameters"] == {k: start[k] for k in settings["names"]}
         assert "not identifiable" in fit["message"] and "0.01 mm" in fit["message"]
-        assert "delta0 0.00667 mm" in fit["message"] and fit["decision"]["margin_N"] < 0.0
+        probe = "0.00667" if power == 1.0 else "0.005"
+        assert f"delta0 {probe} mm" in fit["message"] and fit["decision"]["margin_N"] < 0.0
     elif outcome == "probed":
         assert "searched from there" in fit["message"] and fit["nfev"] > 2
         assert fit["parameters"]["delta0"] < 0.02      # from the probe (0.0067), not the start

@@ -496,8 +496,8 @@ def _onset_check(settings, objective, names, fixed, live, key, runs_at, tie) -> 
     past the window's start (Sec. 4.2.1: 20 mm): a probe with delta0 at the opening the
     ties had reached there (history ``tie_opening_mm``, the largest over the cases), at
     least ``ONSET_PROBE`` x the largest opening so that the probe's ties do pass onset;
-    delta_f at the start's ratio to delta0, alpha as started.  It runs against the start, by the pick rule of
-    :func:`hcal.choice_fit` (lower by at least ``tie``).  Not lower: the step ends, the
+    delta_f at the start's ratio to delta0, alpha as started.  It runs against the start, by
+    the pick rule of :func:`hcal.choice_fit` (lower by at least ``tie``).  Not lower: the step ends, the
     start values kept, the two errors in its message.  Lower: the simplex searches from the
     probe.  Both evaluations are logged (``onset.h5``) and replayed on a rerun."""
     if settings["method"] != "simplex" or "delta0" not in names:
@@ -521,9 +521,10 @@ def _onset_check(settings, objective, names, fixed, live, key, runs_at, tie) -> 
     ep = logged_call(onset, objective, xp)
     words = (f"no tape tie reaches damage onset at the start values (largest opening {opening:.3g} mm "
              f"< delta0 {fixed['delta0']:g} mm), where the curve does not depend on delta0, delta_f "
-             f"and alpha; with the ties debonding past {u_on:g} mm (delta0 {probe['delta0']:.3g} mm, "
-             f"the opening at {u_on:g} mm {at_onset:.3g} mm, at least {ONSET_PROBE:g} x the largest; "
-             f"delta_f {probe['delta_f']:.3g} mm) the error is {ep:.4g} N against {e0:.4g} N")
+             f"and alpha; with the ties debonding (delta0 {probe['delta0']:.3g} mm: their opening at "
+             f"{u_on:g} mm, where the paper saw the tape debond, {at_onset:.3g} mm, at least "
+             f"{ONSET_PROBE:g} x the largest; delta_f {probe['delta_f']:.3g} mm) the error is "
+             f"{ep:.4g} N against {e0:.4g} N")
     if ep < objective.penalty and ep <= e0 - tie:
         _seed(live / "evaluations.h5", names, key, onset.rows[-1])   # the search's first point
         return _Onset(None, {**fixed, **probe}, "simplex",
