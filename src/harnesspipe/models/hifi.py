@@ -193,6 +193,15 @@ def force_drop(u, F) -> dict:
             "from_mm": float(u[j]), "to_mm": float(u[i])}
 
 
+def tie_opening_at(history: pd.DataFrame, u: float) -> float | None:
+    """The tape ties' largest opening once the feeder had reached ``u`` mm (the history's
+    ``tie_opening_mm``, :meth:`HifiSystem.observe`); None when the history does not record
+    it or ends before ``u``."""
+    if "tie_opening_mm" not in history or history["deflection_mm"].max() < u:
+        return None
+    return float(np.interp(u, history["deflection_mm"], history["tie_opening_mm"]))
+
+
 FALL_FRACTION = 0.1   # a fall of at least this fraction of the peak force is flagged (:func:`is_fall`) ...
 SNAP_SPAN_MM = 5.0    # ... and called a snap within this deflection of the peak (:func:`is_snap`)
 

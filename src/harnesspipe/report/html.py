@@ -560,13 +560,11 @@ def _physical_rows(folder: Path, summary: dict) -> list[list]:
 def _opening_note(folder: Path) -> str:
     """The ties' largest opening once the feeder had reached ``DEBOND_FROM_MM`` (energies.csv
     ``tie_opening_mm``) as ``" (x at 20 mm)"``; empty when the run does not record it."""
+    from harnesspipe.models.hifi import tie_opening_at
     if not (folder / "energies.csv").exists():
         return ""
-    h = pd.read_csv(folder / "energies.csv")
-    if "tie_opening_mm" not in h or h["deflection_mm"].max() < DEBOND_FROM_MM:
-        return ""
-    at = np.interp(DEBOND_FROM_MM, h["deflection_mm"], h["tie_opening_mm"])
-    return f" ({at:.3g} at {DEBOND_FROM_MM:g} mm)"
+    at = tie_opening_at(pd.read_csv(folder / "energies.csv"), DEBOND_FROM_MM)
+    return "" if at is None else f" ({at:.3g} at {DEBOND_FROM_MM:g} mm)"
 
 
 def _hifi_run_block(title: str, folder: Path, measured, cfg: dict | None = None,

@@ -497,23 +497,24 @@ def _onset_check(settings, objective, names, fixed, live, key, runs_at, tie) -> 
     ties had reached there (history ``tie_opening_mm``, the largest over the cases), at
     least ``ONSET_PROBE`` x the largest opening so that the probe's ties do pass onset;
     delta_f at the start's ratio to delta0, alpha as started.  It runs against the start, by
-    the pick rule of :func:`hcal.choice_fit` (lower by at least ``tie``).  Not lower: the step ends, the
-    start values kept, the two errors in its message.  Lower: the simplex searches from the
-    probe.  Both evaluations are logged (``onset.h5``) and replayed on a rerun."""
+    the pick rule of :func:`hcal.choice_fit` (lower by at least ``tie``).  Not lower: the
+    step ends, the start values kept, the two errors in its message.  Lower: the simplex
+    searches from the probe.  Both evaluations are logged (``onset.h5``) and replayed on a rerun."""
     if settings["method"] != "simplex" or "delta0" not in names:
         return _Onset(None, fixed, settings["method"])
     onset = EvaluationLog(live / "onset.h5", names, key)
     x0 = np.array([fixed[k] for k in names], dtype=float)
     e0 = logged_call(onset, objective, x0)
     cases = [c for c, *_ in objective.targets]
-    seps = [] if e0 >= objective.penalty else \
-        [runs_at(c, objective.params(x0)).summary.get("tie_separation_max_mm") for c in cases]
+    starts = [] if e0 >= objective.penalty else [runs_at(c, objective.params(x0)) for c in cases]
+    seps = [r.summary.get("tie_separation_max_mm") for r in starts]
     if not seps or any(v is None for v in seps) or max(seps) >= fixed["delta0"]:
         _seed(live / "evaluations.h5", names, key, onset.rows[0])    # the search's first point
         return _Onset(None, fixed, "simplex")
+    from harnesspipe.models.hifi import tie_opening_at
     opening, u_on = max(seps), float(settings["window"][0])
-    at_onset = max((v for v in (_opening_at(runs_at(c, objective.params(x0)), u_on) for c in cases)
-                    if v is not None), default=0.0)
+    at_onset = max((v for v in (tie_opening_at(_history(r), u_on) for r in starts) if v is not None),
+                   default=0.0)
     probe = {k: fixed[k] for k in names}
     probe["delta0"] = max(at_onset, ONSET_PROBE * opening)
     probe["delta_f"] = probe["delta0"] * fixed["delta_f"] / fixed["delta0"]
@@ -538,16 +539,13 @@ def _onset_check(settings, objective, names, fixed, live, key, runs_at, tie) -> 
                   fixed, "choice")
 
 
-def _opening_at(run, u: float) -> float | None:
-    """The tape ties' largest opening once the feeder had reached ``u`` mm (its history's
-    ``tie_opening_mm``, a stored run's energies.csv); None when the run does not record it."""
-    history = getattr(run, "history", None)
+def _history(run) -> pd.DataFrame:
+    """A run's history: its own, or a stored run's energies.csv (empty when there is none)."""
+    if getattr(run, "history", None) is not None:
+        return run.history
     folder = getattr(run, "folder", None)
-    if history is None and folder is not None and (Path(folder) / "energies.csv").exists():
-        history = pd.read_csv(Path(folder) / "energies.csv")
-    if history is None or "tie_opening_mm" not in history:
-        return None
-    return float(np.interp(u, history["deflection_mm"], history["tie_opening_mm"]))
+    path = Path(folder) / "energies.csv" if folder is not None else None
+    return pd.read_csv(path) if path is not None and path.exists() else pd.DataFrame()
 
 
 def _seed(path: Path, names, key: str, row) -> None:
