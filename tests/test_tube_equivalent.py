@@ -11,9 +11,10 @@ import yaml
 from scipy.spatial import cKDTree
 
 from harnesspipe.models.tensile import TubeGeometry, resolution, simulate_axisymmetric_tube
-from harnesspipe.models.tube_equivalent import (equivalent_shell, from_config, ridged_section,
-                                                ring_ovalisation, strip_axial_stiffness,
-                                                uniaxial_stress)
+from harnesspipe.models.tensile import simulate_shell_tube
+from harnesspipe.models.tube_equivalent import (axial_stiffness_fe, equivalent_shell, from_config,
+                                                ridged_section, ring_ovalisation,
+                                                strip_axial_stiffness, uniaxial_stress)
 from conftest import REPO
 
 CLOSED = dict(E=1559.0, sigma_y=8.6, K=25.6, n=0.12)    # Table 2
@@ -132,6 +133,25 @@ def test_closed_form_strip_is_softer_but_close():
     assert 0.7 < k_strip / eq["axial_stiffness"] < 1.0      # no hoop restraint -> softer
     eq_s = equivalent_shell(**CLOSED, method="strip")
     assert eq_s["t"] > eq["t"]
+
+
+def test_slit_ring_with_free_lips_stretches_as_the_free_strip():
+    """A slit tube whose lips pass each other has no hoop force to hold its ridges from
+    flattening: its 3D cell's elastic axial stiffness is the free corrugated strip's closed
+    form (Castigliano, no hoop restraint), well below the closed cell's; with its lips
+    bearing on each other (the tensile stage's slit cell) it lies between the two."""
+    E, nu = 1000.0, 0.42
+    k_closed = axial_stiffness_fe(E, nu)
+    k_slit = axial_stiffness_fe(E, nu, slit=True)
+    k_strip = strip_axial_stiffness(E, nu)
+    assert k_slit == pytest.approx(k_strip, rel=0.03)
+    assert k_slit / k_closed < 0.85
+    strain = 1e-4
+    g = replace(TubeGeometry(), extension=strain * TubeGeometry().gauge)
+    df = simulate_shell_tube(E, 1e3 * E, 0.0, 1.0, nu, cut=True, geometry=g,
+                             res=resolution("default", n_steps=1))
+    k_lips = float(df["force_N"].iloc[-1]) / (2.0 * np.pi * ridged_section()["radius"] * strain)
+    assert k_slit * 1.05 < k_lips < k_closed
 
 
 def test_mass_per_area_and_config(config):

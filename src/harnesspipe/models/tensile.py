@@ -168,13 +168,16 @@ def _dofs(nodes, components):
 
 
 def simulate_shell_tube(E, sigma_y, K, n, nu=0.42, *, cut: bool, geometry=TubeGeometry(),
-                        res: Resolution = PRESETS["default"], contact_stiffness: float | None = None):
+                        res: Resolution = PRESETS["default"], contact_stiffness: float | None = None,
+                        lip_contact: bool = True):
     """Ridged tube, half-pitch cell on half the circumference (theta in [0, pi]), 3D shell.
 
     Planes z = 0 (trough) and z = pitch/2 (crest): symmetry (u_z fixed/driven,
     no rotation about x, y).  Plane y = 0 at theta = pi: mirror symmetry.  At
     theta = 0 the same symmetry for the closed tube; for the open tube the cut
-    edge is free and contact with its mirror image is a penalty keeping y >= 0.
+    edge is free and, with ``lip_contact``, its contact with its mirror image (the other
+    lip) is a penalty keeping y >= 0; without it the lips pass each other, and the wall's
+    rings, open C's, change radius without hoop force.
     One u_x is held against rigid translation.  Force: twice the cell's reaction.
     """
     Xm, Phi, _ = meridian_mesh(geometry, res.meridian)
@@ -189,10 +192,10 @@ def simulate_shell_tube(E, sigma_y, K, n, nu=0.42, *, cut: bool, geometry=TubeGe
     fixed = [_dofs(trough, [2, 3, 4]), _dofs(crest, [3, 4]),
              _dofs(far_edge, [1, 3, 5]), _dofs(far_edge[:1], [0])]
     contact = None
-    if cut:
+    if cut and lip_contact:
         k_c = contact_stiffness or 100.0 * E * geometry.wall
         contact = (cut_edge, 1, k_c)
-    else:
+    elif not cut:
         fixed.append(_dofs(cut_edge, [1, 3, 5]))
     fixed = np.unique(np.concatenate(fixed))
     driven = np.setdiff1d(_dofs(crest, [2]), fixed)

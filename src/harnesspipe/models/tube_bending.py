@@ -138,9 +138,10 @@ def resultant_tube(geometry: TubeGeometry, material: dict, length: float, n_circ
                    n_axial: int, cut: bool = False) -> TubeShells:
     """The smooth shell of :func:`equivalent_tube` with the ridged wall's resultant law
     (:func:`harnesspipe.models.tube_equivalent.wall_row`; thickness: the wall area per
-    unit length, which carries the mass)."""
+    unit length, which carries the mass); a ``cut`` tube's axial laws are the slit ring's,
+    its lips free as the resolved wall's are."""
     w = wall_resultants(material["E"], material["sigma_y"], material["K"], material["n"], geometry,
-                        nu=material["nu"])
+                        nu=material["nu"], slit=cut)
     X, conn, t_contact = _smooth_grid(geometry, _equivalent(geometry, material), length, n_circ,
                                       n_axial, cut)
     n_el = conn.shape[0]

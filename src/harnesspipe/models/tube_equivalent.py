@@ -17,7 +17,8 @@ from functools import lru_cache
 import numpy as np
 from scipy.optimize import brentq, least_squares
 
-from harnesspipe.models.tensile import TubeGeometry, resolution, simulate_axisymmetric_tube
+from harnesspipe.models.tensile import (TubeGeometry, resolution, simulate_axisymmetric_tube,
+                                        simulate_shell_tube)
 
 __all__ = ["equivalent_shell", "ridged_section", "strip_axial_stiffness", "axial_stiffness_fe",
            "cell_membrane_law", "uniaxial_stress", "ring_ovalisation", "from_config",
@@ -27,6 +28,7 @@ RING_OVALISATION = 0.149  # diametral line load on a ring: delta = 0.149 P R^3 /
 CELL_STRAIN = 0.12        # the membrane law is fitted over |eps| <= 12 % (the wall's range in the test)
 CELL_STEPS = 48           # load steps of the cell to CELL_STRAIN (a point every 0.25 %)
 CELL_MERIDIAN = 32        # elements on the cell's half-pitch meridian (the tensile stage's default)
+SLIT_CELL_CIRCUMFERENCE = 16   # elements on the slit cell's half ring (the tensile stage's default)
 HOOP_STRAIN = 0.12        # the hoop moment-curvature law is fitted up to this strain at the crest fibre
 HOOP_POINTS = 48          # curvatures of that fit
 
@@ -86,32 +88,49 @@ def strip_axial_stiffness(E: float, nu: float, geometry: TubeGeometry = TubeGeom
     return 1.0 / compliance
 
 
+def _cell(E, sigma_y, K, n, nu, geometry: TubeGeometry, slit: bool, meridian: int, n_steps: int):
+    """The ridged wall's cell at ``geometry.extension``: the tensile stage's axisymmetric
+    half-pitch cell, or for a ``slit`` wall its 3D half-pitch cell of the slit ring with the
+    lips passing each other (no hoop force: each ring of the wall is an open C that changes
+    its radius by opening).  Returns the tube's force curve (``simulate_*`` frames)."""
+    res = resolution("default", meridian=meridian, n_steps=n_steps,
+                     circumference=SLIT_CELL_CIRCUMFERENCE)
+    if slit:
+        return simulate_shell_tube(E, sigma_y, K, n, nu, cut=True, geometry=geometry, res=res,
+                                   lip_contact=False)
+    return simulate_axisymmetric_tube(E, sigma_y, K, n, nu, geometry=geometry, res=res)
+
+
 @lru_cache(maxsize=32)
-def _unit_axial_stiffness(geometry: TubeGeometry, nu: float, meridian: int, strain: float) -> float:
+def _unit_axial_stiffness(geometry: TubeGeometry, nu: float, meridian: int, strain: float,
+                          slit: bool) -> float:
     E = 1000.0
     g = replace(geometry, extension=strain * geometry.gauge)   # half model moves strain*gauge/2
-    df = simulate_axisymmetric_tube(E, 1.0e3 * E, 0.0, 1.0, nu, geometry=g,
-                                    res=resolution("quick", meridian=meridian, n_steps=1))
+    df = _cell(E, 1.0e3 * E, 0.0, 1.0, nu, g, slit, meridian, 1)
     force = float(df["force_N"].iloc[-1])
     R = 0.5 * sum(geometry.mid_radii)
     return force / (2.0 * np.pi * R * strain) / E
 
 
 def axial_stiffness_fe(E: float, nu: float, geometry: TubeGeometry = TubeGeometry(),
-                       meridian: int = 48, strain: float = 1.0e-5) -> float:
+                       meridian: int = 48, strain: float = 1.0e-5, slit: bool = False) -> float:
     """Axial membrane stiffness N/eps (N/mm per unit circumference) of the ridged tube from the
-    tensile stage's axisymmetric shell (elastic, small strain; linear in E)."""
-    return E * _unit_axial_stiffness(geometry, float(nu), int(meridian), float(strain))
+    tensile stage's axisymmetric shell (elastic, small strain; linear in E); of a ``slit``
+    tube from its 3D cell with free lips (:func:`_cell`), ~0.78 x the closed tube's for
+    the default geometry, as the free strip (:func:`strip_axial_stiffness`) has it: the
+    closed rings' hoop force, which holds the ridges from flattening, is gone."""
+    return E * _unit_axial_stiffness(geometry, float(nu), int(meridian), float(strain), bool(slit))
 
 
 @lru_cache(maxsize=32)
 def cell_membrane_law(E: float, sigma_y: float, K: float, n: float, nu: float,
                       geometry: TubeGeometry = TubeGeometry(), strain: float = CELL_STRAIN,
-                      n_steps: int = CELL_STEPS, meridian: int = CELL_MERIDIAN):
+                      n_steps: int = CELL_STEPS, meridian: int = CELL_MERIDIAN, slit: bool = False):
     """Axial membrane force per unit circumference N (N/mm) of the ridged tube under uniform
     axial strain, from the tensile stage's axisymmetric half-pitch cell with the wall's eq. 2
-    material (finite strain, J2): returns ``eps`` (n_steps + 1,) from 0 to ``strain`` and
-    ``N_t``, ``N_c`` (n_steps + 1,), the magnitudes in tension and in compression.
+    material (finite strain, J2), or a ``slit`` tube's 3D cell with free lips (:func:`_cell`):
+    returns ``eps`` (n_steps + 1,) from 0 to ``strain`` and ``N_t``, ``N_c`` (n_steps + 1,),
+    the magnitudes in tension and in compression.
 
     The corrugated wall stretches by unbending its ridges: it stays nearly linear to a few
     per cent, far beyond the material's yield strain, and it is stiffer in tension (the
@@ -119,9 +138,7 @@ def cell_membrane_law(E: float, sigma_y: float, K: float, n: float, nu: float,
     forces = []
     for sign in (1.0, -1.0):
         g = replace(geometry, extension=sign * strain * geometry.gauge)
-        df = simulate_axisymmetric_tube(E, sigma_y, K, n, nu, geometry=g,
-                                        res=resolution("default", meridian=meridian,
-                                                       n_steps=n_steps))
+        df = _cell(E, sigma_y, K, n, nu, g, slit, meridian, n_steps)
         forces.append(np.abs(df["force_N"].to_numpy()) / (np.pi * sum(geometry.mid_radii)))
     eps = np.linspace(0.0, strain, n_steps + 1)
     return eps, forces[0], forces[1]
@@ -288,7 +305,8 @@ def flow_table(x, y, k: float, n_tab: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def wall_resultants(E: float, sigma_y: float, K: float, n: float,
-                    geometry: TubeGeometry = TubeGeometry(), *, nu: float = 0.42) -> dict:
+                    geometry: TubeGeometry = TubeGeometry(), *, nu: float = 0.42,
+                    slit: bool = False) -> dict:
     """Resultant stiffnesses and flow tables of the ridged wall for the shell law of
     :mod:`harnesspipe.fe.materials.tube_wall` (docs/theory/tube_equivalent.md), per unit
     length of the mean cylinder (radius ``R``):
@@ -310,15 +328,22 @@ def wall_resultants(E: float, sigma_y: float, K: float, n: float,
       (the shell's thickness: mass per area rho A_w);
     * ``cell``: the cell's (eps, N_t, N_c) and ``hoop_curve`` the section's (kappa, M),
       the references the law is checked against.
+
+    ``slit``: the axial laws of a tube slit along its length whose lips are free (the tube
+    alone on the pins), from the slit ring's cell (:func:`cell_membrane_law`): ~0.78 x the
+    closed wall's, since open rings do not hold the ridges from flattening by hoop force.
+    Where the lips bear on each other (a slit tube rolled shut onto its bundle) the closed
+    cell stands nearer: the tensile stage's slit cell with its lips in contact carries
+    0.93 x the closed one elastically.
     """
     from harnesspipe.fe.materials.tube_wall import N_TAB
     if not (E > 0 and sigma_y >= 0 and K >= 0 and n > 0):
         raise ValueError(f"invalid tube material: E={E}, sigma_y={sigma_y}, K={K}, n={n}")
     sec = ridged_section(geometry)
     G = E / (2.0 * (1.0 + nu))
-    k_ax = axial_stiffness_fe(E, nu, geometry)
+    k_ax = axial_stiffness_fe(E, nu, geometry, slit=slit)
     eps, N_t, N_c = cell_membrane_law(float(E), float(sigma_y), float(K), float(n), float(nu),
-                                      geometry)
+                                      geometry, slit=bool(slit))
     tangent = max(np.max(np.diff(N_t) / np.diff(np.log1p(eps))),
                   np.max(np.diff(N_c) / np.diff(-np.log1p(-eps))))
     k_e = max(k_ax, 1.02 * tangent)
@@ -352,11 +377,12 @@ def wall_row(w: dict, kind: float) -> np.ndarray:
 
 def wall_from_config(config: dict, covering: str, material: dict) -> dict:
     """:func:`wall_resultants` of a ``coverings`` entry (as :func:`from_config`), with the
-    material density ``rho``."""
+    material density ``rho``; a ``cut`` tube's axial laws are the slit ring's (the CWB
+    model takes this law for a slit tube only as moulded, its lips apart)."""
     cov = config["coverings"][covering]
     geom = TubeGeometry(d_inner=cov["d_i"], d_outer=cov["d_o"], wall=cov["t"], pitch=cov["pitch"])
     mat = config["materials"][cov["material"]]
     out = wall_resultants(material["E"], material["sigma_y"], material["K"], material["n"], geom,
-                          nu=mat.get("nu", 0.42))
+                          nu=mat.get("nu", 0.42), slit=bool(cov.get("cut", False)))
     out["rho"] = float(mat["rho"])
     return out
