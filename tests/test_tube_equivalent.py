@@ -10,8 +10,8 @@ import pytest
 import yaml
 from scipy.spatial import cKDTree
 
-from harnesspipe.models.tensile import TubeGeometry, resolution, simulate_axisymmetric_tube
-from harnesspipe.models.tensile import simulate_shell_tube
+from harnesspipe.models.tensile import (TubeGeometry, resolution, simulate_axisymmetric_tube,
+                                        simulate_shell_tube)
 from harnesspipe.models.tube_equivalent import (axial_stiffness_fe, equivalent_shell, from_config,
                                                 ridged_section, ring_ovalisation,
                                                 strip_axial_stiffness, uniaxial_stress)
