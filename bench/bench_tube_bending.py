@@ -16,11 +16,12 @@ default-profile mesh (16 round x 32 along), the resultant law also on a fine one
 32 x 128): the law's own error with the smooth mesh's taken out (the slit tube's open
 section warps and twists over lengths the CWB mesh's 4.8 mm shells resolve coarsely).  The
 isotropic equivalent is not refined: its section thickness t_eq (11.6 mm) is ten times the
-fine mesh's shells, and the slit tube's run at 32 x 128 loses its energy balance past 18 mm.  Reported: the feeder's
-force at a few deflections, each smooth shell's difference from the finest resolved tube and
-from its Richardson estimate at h -> 0 (order 2, from the two finest meshes; with three
-meshes their observed order beside it: the check of that order), the issue's goal being
-within 10 % up to 20 mm; KE/IE after the ramp and each run's wall time.  Two runs go side by
+fine mesh's shells, and the slit tube's run at 32 x 128 loses its energy balance past 18 mm.
+Reported: the feeder's force at a few deflections, each smooth shell's difference from the
+finest resolved tube, from its estimate at the finer ring and from its Richardson estimate at
+h -> 0 (order 2, from the two finest meshes; with three meshes their observed order beside
+it: the check of that order), the issue's goal being within 10 % up to 20 mm; KE/IE after
+the ramp and each run's wall time.  Two runs go side by
 side, one Numba thread each: the defaults (the closed tube, 8 and 12 shells a pitch, 8 at 32
 round) take about 40 minutes; the slit tube with 8, 12 and 16 a pitch about 1.5 hours.
 """
