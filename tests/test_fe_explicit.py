@@ -3,12 +3,11 @@ import time
 
 import numpy as np
 import pytest
-from explicit_beam_driver import (BeamExplicit, ExplicitSettings, run_explicit, stable_step,
-                                  wave_step)
+from explicit_beam_driver import BeamExplicit, run_explicit
 
 import harnesspipe  # noqa: F401
 from harnesspipe import rom
-from harnesspipe.fe.solvers.central_difference import ExplicitError, smooth_step
+from harnesspipe.fe.solvers.central_difference import smooth_step
 from harnesspipe.models.rom_beam import BeamSystem, Material, Mesh
 
 E, NU, RADIUS, SPAN, DEFL = 20.0, 0.39, 7.0, 127.0, 5.0
@@ -37,14 +36,12 @@ def first_period():
     return 2.0 * np.pi / omega
 
 
-def test_smooth_step_and_eq11():
+def test_smooth_step():
     assert smooth_step(0.0) == (0.0, 0.0, 0.0) and smooth_step(1.0) == (1.0, 0.0, 0.0)
     s, ds, d2s = smooth_step(0.5)
     assert s == pytest.approx(0.5) and ds == pytest.approx(1.875) and d2s == pytest.approx(0.0)
     h = 1e-6
     assert ds == pytest.approx((smooth_step(0.5 + h)[0] - smooth_step(0.5 - h)[0]) / (2 * h))
-    c_d = np.sqrt(E * (1 - NU) / (F_M * RHO * (1 + NU) * (1 - 2 * NU)))
-    assert wave_step(2.0, E, NU, F_M * RHO) == pytest.approx(2.0 / c_d)
 
 
 def test_pinned_beam_quasi_static_matches_rom():
@@ -68,19 +65,6 @@ def test_pinned_beam_quasi_static_matches_rom():
     assert res.balance_error < 0.01 and res.max_balance_error < 0.01
     assert res.w_ext > 0.0 and res.ie == pytest.approx(res.w_ext, rel=0.01)
     assert system.u[load_dof // 6, 1] == pytest.approx(-DEFL)
-
-
-def test_absurd_step_stops_with_clear_error():
-    system, _ = pinned_beam()
-    problem = BeamExplicit(system, RHO, F_M)
-    T = 20.0 * first_period()
-    res_dt = 0.9 * min(*stable_step(problem))
-    with pytest.raises(ExplicitError) as exc:
-        run_explicit(problem, T, ExplicitSettings(dt=50.0 * res_dt))
-    msg = str(exc.value)
-    assert "explicit run stopped" in msg and "step" in msg and "KE" in msg and "IE" in msg
-    assert exc.value.step < 1000
-    print(msg)
 
 
 @pytest.mark.parametrize("ramp", [0.0, 0.1, 0.25, 0.5])

@@ -28,10 +28,20 @@ def test_fibre_stress_lies_on_eq2_flow_curve(n):
 
 
 def test_fibre_unloads_elastically_and_reloads_on_the_hardened_curve():
+    """Loaded to 3 %, unloaded to 2.9 % (elastic), reloaded from there: elastic up to the
+    strain where the stress meets the flow stress reached before (no new yield at 2.99 %),
+    then on the eq. 2 curve past it (3.5 %: more plastic strain, the stress the flow stress
+    of the larger alpha)."""
     E, sigma_y, K, n = 1000.0, 5.0, 80.0, 0.5
-    _, _, ep, al = fibre_update(0.03, 0.0, 0.0, E, sigma_y, K, n, False)
+    sig1, _, ep, al = fibre_update(0.03, 0.0, 0.0, E, sigma_y, K, n, False)
     sig, Et, ep2, al2 = fibre_update(0.029, ep, al, E, sigma_y, K, n, False)
-    assert Et == E and ep2 == ep and sig == pytest.approx(E * (0.029 - ep))
+    assert Et == E and ep2 == ep and al2 == al and sig == pytest.approx(E * (0.029 - ep))
+    sig, Et, ep3, al3 = fibre_update(0.0299, ep2, al2, E, sigma_y, K, n, False)
+    assert Et == E and ep3 == ep and al3 == al and sig < sig1
+    sig, Et, ep4, al4 = fibre_update(0.035, ep3, al3, E, sigma_y, K, n, False)
+    assert al4 > al and ep4 > ep and Et < E
+    assert sig == pytest.approx(flow_stress(al4, sigma_y, K, n), rel=1e-10)
+    assert sig == pytest.approx(E * (0.035 - ep4), rel=1e-12)
 
 
 @pytest.mark.parametrize("n", [0.12, 0.83, 1.0, 1.5])

@@ -10,7 +10,7 @@ import pytest
 
 from harnesspipe.config import load
 from harnesspipe.fe.rotation import rotate_nodes
-from harnesspipe.fe.solvers.central_difference import DynamicsSettings, integrate
+from harnesspipe.fe.solvers.central_difference import DynamicsSettings, ExplicitError, integrate
 from harnesspipe.models.hifi_parts import Wires
 
 
@@ -131,6 +131,45 @@ def test_balance_error_is_the_bounded_verlet_term_and_does_not_drift():
     assert b[-40:].max() <= 1.5 * b[:40].max()    # no drift
 
 
+
+class UnstableSpringMass(SpringMass):
+    """The springs above integrated at ``factor`` x their critical step."""
+
+    def __init__(self, factor, **kw):
+        super().__init__(**kw)
+        self.factor = factor
+
+    def stable_step(self):
+        return self.factor * super().stable_step()
+
+
+@pytest.mark.parametrize("factor, safety", [(50.0, 0.9), (1.0, 1.2)])
+def test_a_step_beyond_the_stable_one_stops_the_run_and_says_why(factor, safety):
+    """integrate at 45 x and at 1.2 x the critical step (eq. 11): the run blows up and
+    stops with ExplicitError within its first periods, naming the check it failed (energy
+    balance or non-finite state), the step, the time and the energies; at 0.9 x it runs."""
+    s = UnstableSpringMass(factor)
+    with pytest.raises(ExplicitError) as exc:
+        integrate(s, 2.0, DynamicsSettings(safety=safety), internal="spring")
+    e = exc.value
+    assert 0 < e.step < 2000 and e.time == pytest.approx(e.step * e.dt, rel=1e-9)
+    assert e.dt == pytest.approx(safety * s.stable_step())
+    msg = str(e)
+    assert msg.startswith("explicit run stopped: ") and f"at step {e.step}," in msg
+    assert ("energy balance error" in msg) or ("non-finite state" in msg)
+    assert "KE = " in msg and "IE = " in msg and "W_ext = " in msg
+    res = integrate(SpringMass(), 2.0, DynamicsSettings(safety=0.9), internal="spring")
+    assert res.n_steps > 7000 and res.energy_error < 1.0
+
+
+def test_a_displacement_beyond_the_bound_stops_the_run():
+    """A stable run whose pulled end travels further than ``max_displacement``: stopped at
+    the first history row past it, the message giving the displacement and the bound."""
+    s = SpringMass()
+    with pytest.raises(ExplicitError) as exc:
+        integrate(s, 2.0, DynamicsSettings(safety=0.9, max_displacement=1e-4), internal="spring")
+    assert "displacement" in str(exc.value) and "> 0.0001 mm" in str(exc.value)
+    assert s.displacement_max() > 1e-4
 
 def test_close_and_kick_is_the_closing_half_step_then_the_next_opening():
     """close_and_kick (one step's closing half kick and the next's opening, fused) against
