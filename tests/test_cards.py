@@ -259,7 +259,7 @@ def test_missing_table_file_exits_2(tmp_path):
     code, _, err = _cli("--table", tmp_path / "none.csv", "--format", "calculix",
                         "--out", tmp_path / "out")
     assert code == 2
-    assert err == [f"harnesspipe: error: {tmp_path / 'none.csv'}: property table not found"]
+    assert err[-1] == f"harnesspipe cards: error: argument --table: {tmp_path / 'none.csv'}: no such file"
     assert not (tmp_path / "out").exists()
 
 

@@ -68,9 +68,12 @@ def test_a_broken_record_is_refused_naming_the_file_and_what_is_wrong(tmp_path):
 def test_the_report_command_refuses_a_missing_band_record_and_writes_nothing(tmp_path, capsys):
     from harnesspipe import cli
     out = tmp_path / "report" / "index.html"
+    (tmp_path / "check.txt").write_text("data: OK\n")
     args = ["report", "--check", str(tmp_path / "check.txt"), "--out", str(out), "--band"]
-    assert cli.main(args + [str(tmp_path / "none.json")]) == 2
-    assert "report --band" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:                   # argparse: before anything runs
+        cli.main(args + [str(tmp_path / "none.json")])
+    assert exc.value.code == 2
+    assert f"argument --band: {tmp_path / 'none.json'}: no such file" in capsys.readouterr().err
     bad = tmp_path / "band.json"
     bad.write_text("{")
     assert cli.main(args + [str(bad)]) == 2

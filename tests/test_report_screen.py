@@ -73,11 +73,14 @@ def test_the_report_command_refuses_a_broken_record_and_writes_nothing(tmp_path,
     bad = tmp_path / "screen.json"
     bad.write_text(json.dumps({"rows": []}))
     out = tmp_path / "report" / "index.html"
+    (tmp_path / "check.txt").write_text("data: OK\n")
     args = ["report", "--check", str(tmp_path / "check.txt"), "--out", str(out), "--screen"]
     assert cli.main(args + [str(bad)]) == 2
     err = capsys.readouterr().err
     assert f"report --screen: {bad}: expected bench/bench_sensitivity.py's record" in err
     assert "missing: ['commit', 'profile', 'date', 'step']" in err
-    assert cli.main(args + [str(tmp_path / "none.json")]) == 2
-    assert "no such file" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:                   # argparse: before anything runs
+        cli.main(args + [str(tmp_path / "none.json")])
+    assert exc.value.code == 2
+    assert f"argument --screen: {tmp_path / 'none.json'}: no such file" in capsys.readouterr().err
     assert not out.exists()

@@ -48,7 +48,8 @@ def _input_errors() -> tuple[type[BaseException], ...]:
     from harnesspipe.cards.properties import TableError
     from harnesspipe.config import ConfigError
     from harnesspipe.data.experimental import DataError
-    return (ConfigError, DataError, InputError, TableError, FileNotFoundError)
+    from harnesspipe.input_files import InputFileError
+    return (ConfigError, DataError, InputError, InputFileError, TableError, FileNotFoundError)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -11,7 +11,8 @@ from pathlib import Path
 import yaml
 from jsonschema import Draft202012Validator
 
-from harnesspipe.validate import deflection_problem, interface_problem, problem
+from harnesspipe.validate import (deflection_problem, interface_problem, problem,
+                                  tape_tension_problem)
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 SCHEMA_PATH = REPO_ROOT / "workflow" / "schemas" / "config.schema.yaml"
@@ -97,6 +98,10 @@ def _check_physical(cfg: dict, source: str) -> None:
     bad = deflection_problem(tp["deflection"], tp["span"])
     if bad:
         raise ConfigError(f"{source}: three_point.deflection: {tp['deflection']!r}: {bad}")
+    tension = cfg["hifi"]["build"]["tape_tension"]
+    bad = tape_tension_problem(tension, cfg["materials"]["pvc_tape"])
+    if bad:
+        raise ConfigError(f"{source}: hifi.build.tape_tension: {tension!r}: {bad} (materials.pvc_tape)")
 
 
 def _check_semantics(cfg: dict, source: str) -> None:

@@ -24,7 +24,7 @@ import yaml
 from jsonschema import Draft202012Validator
 
 from harnesspipe.config import REPO_ROOT, ConfigError, read_yaml
-from harnesspipe.validate import deflection_problem, problem
+from harnesspipe.validate import deflection_problem, problem, tape_tension_problem
 
 SCHEMA_PATH = REPO_ROOT / "workflow" / "schemas" / "campaign.schema.yaml"
 COVERINGS = {"closed": "closed_tube", "open": "open_tube", "fabric": "fabric_tube", "none": "none"}
@@ -231,6 +231,12 @@ def _check_entry(name: str, raw: dict, entry: dict, config: dict, wire_types: di
     if bad:
         out.append(f"{where}: test.deflection: {entry['test']['deflection']:g}: {bad}")
     out += [f"{where}: build.{k}: {v!r}: {msg}" for k, v in entry["build"].items() if (msg := problem(k, v))]
+    tension = entry["build"].get("tape_tension")
+    if (tension is not None and not problem("tape_tension", tension)
+            and {"sigma_y", "width", "thickness"} <= set(mats.get(tape, {}))):
+        bad = tape_tension_problem(float(tension), mats[tape])
+        if bad:
+            out.append(f"{where}: build.tape_tension: {tension!r}: {bad} (tape {tape})")
     if not out:
         out += _check_fit(where, raw, entry, config, wire_types, tapes)
     return out

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from harnesspipe.campaign.library import COLUMNS
+from harnesspipe.input_files import InputFileError, read_csv
 from harnesspipe.report import plots
 
 COVER_COLOURS = {"closed": "tab:blue", "open": "tab:orange", "fabric": "tab:green", "none": "tab:gray"}
@@ -110,7 +112,11 @@ def sources(root: Path, lib: pd.DataFrame) -> str:
 def build(library_csv: Path, out: Path, title: str = "") -> str:
     """Write the page for ``library_csv`` (the construction folders beside it) to ``out``."""
     library_csv, out = Path(library_csv), Path(out)
-    lib = pd.read_csv(library_csv, keep_default_na=False, na_values=[""])
+    lib = read_csv(library_csv, keep_default_na=False, na_values=[""])
+    missing = [c for c in COLUMNS if c not in lib.columns]
+    if missing:
+        raise InputFileError(f"{library_csv}: missing columns {', '.join(missing)} (a "
+                             "properties.csv as `harnesspipe campaign library` writes it)")
     root = library_csv.parent
     ok = lib[lib["status"] == "ok"]
     parts = [f"<h1>{html.escape(title or 'Virtual test campaign')}</h1>",

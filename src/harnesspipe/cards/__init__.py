@@ -55,6 +55,11 @@ def write_cards(table, fmt: str, out, config=None, log=print) -> list[Path]:
         cards = {**_cards(p, fmt, part_id), "README.md": case_readme(p, fmt, Path(table), part_id)}
         files.update({out / p.case / name: text for name, text in cards.items()})
     files[out / "README.md"] = index_readme(rows, notes, fmt, Path(table))
+    blocked = [str(f) for path in files for f in (path, path.parent)
+               if f.exists() and f.is_dir() == (f == path)]
+    if blocked:
+        raise TableError(f"{out}: {blocked[0]} is in the way (a folder where a card goes or a "
+                         "file where a case's folder goes): nothing written")
     for path, text in files.items():
         _write(path, text)
     return [out / p.case for p in rows]

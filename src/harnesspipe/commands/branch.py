@@ -1,7 +1,7 @@
 """``harnesspipe rom branch``: the Y-harness pull test (Sec. 5); the lead's ``rom`` group adds it."""
 from __future__ import annotations
 
-from pathlib import Path
+from harnesspipe.commands.paths import output_file
 
 
 def add_branch_parser(rom_subparsers) -> None:
@@ -9,7 +9,7 @@ def add_branch_parser(rom_subparsers) -> None:
     p = rom_subparsers.add_parser("branch", help="Y-shaped branching harness pull test (Fig. 16/20)")
     p.add_argument("--load-case", required=True, help="inplane (Fig. 16) or outofplane (Fig. 20)")
     p.add_argument("--alpha", default="0.2", help="eq. 15 damping coefficient of the joint [s]")
-    p.add_argument("--out", type=Path, required=True, help="CSV: displacement_mm,force_N")
+    p.add_argument("--out", type=output_file, required=True, help="CSV: displacement_mm,force_N")
     p.set_defaults(func=_branch)
 
 

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from harnesspipe import config as cfgmod
+from harnesspipe.commands.paths import input_file, output_dir, output_file
 
 
 def register(sub) -> None:
@@ -13,32 +14,32 @@ def register(sub) -> None:
     csub = camp.add_subparsers(dest="campaign_command", required=True, metavar="STEP")
 
     p = csub.add_parser("check", help="validate a catalogue (exit 2 naming the construction and key)")
-    p.add_argument("catalogue", type=Path)
-    p.add_argument("--config", type=Path, default=cfgmod.DEFAULT_CONFIG)
+    p.add_argument("catalogue", type=input_file)
+    p.add_argument("--config", type=input_file, default=cfgmod.DEFAULT_CONFIG)
     p.set_defaults(func=_check)
 
     p = csub.add_parser("hifi", help="the hi-fi virtual test of one construction")
     p.add_argument("--construction", required=True)
     p.add_argument("--settings", type=_settings, required=True)
-    p.add_argument("--outdir", type=Path, required=True)
+    p.add_argument("--outdir", type=output_dir, required=True)
     p.set_defaults(func=_hifi)
 
     p = csub.add_parser("rom", help="eq. 13 + simplex on a construction's virtual test: its library row")
     p.add_argument("--construction", required=True)
     p.add_argument("--hifi", type=Path, required=True, help="folder of the virtual test (result.json)")
     p.add_argument("--settings", type=_settings, required=True)
-    p.add_argument("--outdir", type=Path, required=True)
+    p.add_argument("--outdir", type=output_dir, required=True)
     p.set_defaults(func=_rom)
 
     p = csub.add_parser("library", help="collect property.json files into properties.csv")
-    p.add_argument("--rows", type=Path, nargs="+", required=True)
-    p.add_argument("--out", type=Path, required=True)
+    p.add_argument("--rows", type=input_file, nargs="+", required=True)
+    p.add_argument("--out", type=output_file, required=True)
     p.set_defaults(func=_library)
 
     p = csub.add_parser("page", help="the campaign's HTML page (offline, images embedded)")
-    p.add_argument("--library", type=Path, required=True, help="properties.csv")
+    p.add_argument("--library", type=input_file, required=True, help="properties.csv")
     p.add_argument("--title", default="")
-    p.add_argument("--out", type=Path, required=True)
+    p.add_argument("--out", type=output_file, required=True)
     p.set_defaults(func=_page)
 
 

@@ -1,8 +1,7 @@
 """``harnesspipe cards``: solver cards of a property table (issue 28, harnesspipe.cards)."""
 from __future__ import annotations
 
-from pathlib import Path
-
+from harnesspipe.commands.paths import input_file, output_dir
 
 FORMAT_CHOICES = "calculix|abaqus|lsdyna"   # harnesspipe.cards.FORMATS, named here so that
                                              # building the parser imports no model code
@@ -13,14 +12,14 @@ def register(sub) -> None:
                        description="Write, per case of a property table (results/rom/table3.csv "
                                    "or a campaign's properties.csv), the solver cards of its "
                                    "effective beam and a README giving every number's source.")
-    p.add_argument("--table", type=Path, required=True,
+    p.add_argument("--table", type=input_file, required=True,
                    help="CSV with columns case,E,sigma_y,K,n (optional r_o, nu, rho, span, "
                         "deflection, status)")
     p.add_argument("--format", dest="fmt", required=True, metavar=FORMAT_CHOICES,
                    help="solver: calculix and abaqus write material.inp and three_point.inp, "
                         "lsdyna material.k")
-    p.add_argument("--out", type=Path, required=True, help="folder; one sub-folder per case")
-    p.add_argument("--config", type=Path, default=None,
+    p.add_argument("--out", type=output_dir, required=True, help="folder; one sub-folder per case")
+    p.add_argument("--config", type=input_file, default=None,
                    help="config file for r_o, rho and the test geometry where the table has "
                         "none (default: the repository's config/config.yaml)")
     p.set_defaults(func=_cards)

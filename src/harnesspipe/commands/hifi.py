@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from harnesspipe.commands.paths import input_file, output_dir, output_file
+
 #: the calibrated interface the pipeline writes (hifi_interface rule), relative to the cwd
 CALIBRATED = Path("results/hifi/interface.csv")
 
@@ -22,8 +24,8 @@ def register(sub) -> None:
     p = hsub.add_parser("three-point", help="explicit three-point bending of a wire bundle")
     p.add_argument("--case", required=True, help="case name (config `cases` / `hifi.extra_cases`)")
     p.add_argument("--profile", default=None, help="resolution profile (config `profiles`)")
-    p.add_argument("--config", type=Path, default=None, help="config file (default: the package's)")
-    p.add_argument("--coverings", type=Path, default=None,
+    p.add_argument("--config", type=input_file, default=None, help="config file (default: the package's)")
+    p.add_argument("--coverings", type=input_file, default=None,
                    help="table2.csv of the tensile stage (default: config hifi.coverings)")
     p.add_argument("--interface", default=None, metavar="paper|start|FILE",
                    help="interface values of the run: paper (Sec. 4.2: mu_rtb 0.3, mu_rtp 0.1, "
@@ -33,14 +35,14 @@ def register(sub) -> None:
     p.add_argument("--set", dest="overrides", type=_assignment, action="append", default=[],
                    metavar="KEY=VALUE",
                    help="override one value on top of --interface, e.g. mu_rtb=0.25 (repeatable)")
-    p.add_argument("--out", type=Path, required=True, help="CSV: deflection_mm,force_N")
-    p.add_argument("--summary", type=Path, default=None,
+    p.add_argument("--out", type=output_file, required=True, help="CSV: deflection_mm,force_N")
+    p.add_argument("--summary", type=output_file, default=None,
                    help="summary JSON (default: summary.json in the --outdir folder)")
     p.add_argument("--threads", type=int, default=None,
                    help="Numba threads (default: all cores, which sleep when idle, so another "
                         "job on the machine does not stall them: OMP_WAIT_POLICY=passive unless "
                         "set; Snakemake passes its `threads`)")
-    p.add_argument("--outdir", type=Path, default=None,
+    p.add_argument("--outdir", type=output_dir, default=None,
                    help="folder for energies, slip-out, shapes (default: OUT_files beside --out)")
     p.set_defaults(func=_three_point)
 
@@ -50,15 +52,15 @@ def register(sub) -> None:
     p.add_argument("--t-total", type=float, default=None,
                    help="simulated seconds of the 50 mm pull (default: config branch.hifi.t_total)")
     p.add_argument("--profile", default=None, help="resolution profile (config `profiles`)")
-    p.add_argument("--config", type=Path, default=None, help="config file (default: the package's)")
-    p.add_argument("--coverings", type=Path, default=None,
+    p.add_argument("--config", type=input_file, default=None, help="config file (default: the package's)")
+    p.add_argument("--coverings", type=input_file, default=None,
                    help="table2.csv of the tensile stage (default: config hifi.coverings)")
     p.add_argument("--threads", type=int, default=None,
                    help="Numba threads (default: all cores, sleeping when idle: see three-point)")
-    p.add_argument("--out", type=Path, required=True, help="CSV: displacement_mm,force_N")
-    p.add_argument("--summary", type=Path, default=None,
+    p.add_argument("--out", type=output_file, required=True, help="CSV: displacement_mm,force_N")
+    p.add_argument("--summary", type=output_file, default=None,
                    help="summary JSON (default: summary.json in the --outdir folder)")
-    p.add_argument("--outdir", type=Path, default=None,
+    p.add_argument("--outdir", type=output_dir, default=None,
                    help="folder for energies and S2's bent shapes (default: OUT_files beside --out)")
     p.set_defaults(func=_branch)
 

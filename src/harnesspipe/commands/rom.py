@@ -4,6 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from harnesspipe.commands.branch import add_branch_parser
+from harnesspipe.commands.paths import output_file
 
 
 def _number(text: str, *, strict: bool) -> float:
@@ -69,7 +70,7 @@ def register(sub) -> None:
     p.add_argument("--elements", type=int, default=None,
                    help="beam elements, even (default: the model's, 40)")
     p.add_argument("--elastic", action="store_true", help="ignore plasticity")
-    p.add_argument("--out", type=Path, required=True, help="CSV: deflection_mm,force_N")
+    p.add_argument("--out", type=output_file, required=True, help="CSV: deflection_mm,force_N")
     p.set_defaults(func=_three_point)
 
     p = rsub.add_parser("cantilever", help="cantilever under a tip dead load")
@@ -81,7 +82,7 @@ def register(sub) -> None:
     p.add_argument("--elements", type=int, default=None,
                    help="beam elements (default: the model's, 20)")
     p.add_argument("--elastic", action="store_true", help="ignore plasticity")
-    p.add_argument("--out", type=Path, required=True,
+    p.add_argument("--out", type=output_file, required=True,
                    help="CSV: load_N,tip_ux_mm,tip_uy_mm,tip_rotation_rad")
     p.set_defaults(func=_cantilever)
 

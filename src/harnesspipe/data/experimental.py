@@ -29,6 +29,7 @@ CURVE_COLUMNS = ("time_s", "displacement_mm", "force_N")
 MARKER_COLUMNS = ("time_s", "displacement_mm", "marker", "x_mm", "y_mm")
 MIN_ROWS = 10
 METRES_RATIO = 1e-2   # max |u| below stroke * this: values look like metres
+OVERRUN_RATIO = 1.5   # max |u| above stroke * this: the stated stroke (or the unit) is wrong
 KILONEWTON_RATIO = 1e-3  # max |F| below load cell * this: values look like kN
 
 
@@ -137,6 +138,11 @@ def _check_curve(path: Path, t: dict, entry: dict, problems) -> bool:
     if np.max(np.abs(u)) < METRES_RATIO * proto["stroke_mm"]:
         problems.append(f"{path}: displacement_mm peaks at {np.max(np.abs(u)):g} for a "
                         f"{proto['stroke_mm']:g} mm stroke: values look like metres, expected mm")
+        ok = False
+    if np.max(np.abs(u)) > OVERRUN_RATIO * proto["stroke_mm"]:
+        problems.append(f"{path}: displacement_mm reaches {np.max(np.abs(u)):g}, beyond the "
+                        f"{proto['stroke_mm']:g} mm stroke of protocol.stroke_mm: the stroke or "
+                        "the unit (expected mm) is wrong")
         ok = False
     if np.max(np.abs(F)) < KILONEWTON_RATIO * proto["load_cell_N"]:
         problems.append(f"{path}: force_N peaks at {np.max(np.abs(F)):g} with a "

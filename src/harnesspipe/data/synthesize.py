@@ -26,7 +26,7 @@ import numpy as np
 import yaml
 
 from harnesspipe import __version__
-from harnesspipe.data.experimental import CURVE_COLUMNS, MARKER_COLUMNS, MANIFEST
+from harnesspipe.data.experimental import CURVE_COLUMNS, MANIFEST, MARKER_COLUMNS, DataError
 
 TRUTH_FILE = "truth.yaml"
 
@@ -147,15 +147,21 @@ def synthesize(cfg: dict, out: Path, generators: list[str] | None = None) -> Pat
     names = generators or sorted(GENERATORS)
     unknown = [n for n in names if n not in GENERATORS]
     if unknown:
-        raise ValueError(f"unknown generator(s) {unknown}; available: {sorted(GENERATORS)}")
+        raise DataError([f"synthesize --only: unknown generator(s) {unknown}; available: {sorted(GENERATORS)}"])
     syn = cfg["synthesize"]
     out = Path(out)
+    specs = [spec for name in names for spec in GENERATORS[name](cfg)]
+    dropped = sorted(set(_listed_tests(out)) - {spec.test_id for spec in specs})
+    if dropped:
+        raise DataError([f"{out}: its {MANIFEST} lists {len(dropped)} test(s) these generators "
+                         f"do not make ({', '.join(dropped[:3])}{', ...' if len(dropped) > 3 else ''}), "
+                         "which the new manifest would drop: write into a new folder, or run "
+                         "every generator"])
     tests, truths = {}, {}
     with tempfile.TemporaryDirectory(dir=out.parent if out.parent.exists() else None) as tmp:
         tmp = Path(tmp)
-        for name in names:
-            for spec in GENERATORS[name](cfg):
-                tests[spec.test_id], truths[spec.test_id] = synthesize_spec(spec, tmp, syn)
+        for spec in specs:
+            tests[spec.test_id], truths[spec.test_id] = synthesize_spec(spec, tmp, syn)
         manifest = {
             "schema_version": 1,
             "description": "Synthetic twin of the paper's tests (no raw data is published); "
@@ -179,6 +185,17 @@ def synthesize(cfg: dict, out: Path, generators: list[str] | None = None) -> Pat
                 target.unlink()
             shutil.move(str(child), str(target))
     return out
+
+
+def _listed_tests(folder: Path) -> list[str]:
+    """The test ids of the manifest in ``folder`` (none: no manifest or an unreadable one,
+    which the new one replaces)."""
+    try:
+        listed = yaml.safe_load((folder / MANIFEST).read_text())
+    except (OSError, yaml.YAMLError):
+        return []
+    tests = listed.get("tests") if isinstance(listed, dict) else None
+    return list(tests) if isinstance(tests, dict) else []
 
 
 def read_truth(data_dir: Path) -> dict:

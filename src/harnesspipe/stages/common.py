@@ -13,6 +13,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from harnesspipe.input_files import read_json
+
 
 def write_json(path: Path, payload: dict) -> None:
     """Atomic JSON write (a failed run never leaves a valid-looking file)."""
@@ -54,8 +56,8 @@ def write_fit(outdir: Path, *, stage: str, item: str, test_id: str, parameters: 
 
 
 def read_fit(path: Path) -> dict:
-    with open(path) as f:
-        return json.load(f)
+    """A fit.json (or any JSON record of a stage); not JSON: InputFileError naming the file."""
+    return read_json(path)
 
 
 def write_shapes(outdir: Path, shapes: dict, stem: str = "shape") -> Path:

@@ -9,10 +9,14 @@ import h5py
 import numpy as np
 
 from harnesspipe.data.experimental import DataError, load_test, read_manifest
+from harnesspipe.input_files import InputFileError, check_hdf5
 
 
-def check_data(data_dir: Path) -> str:
-    """Validate every test; return a one-line summary or raise DataError (all problems)."""
+def check_data(data_dir: Path, cfg: dict | None = None) -> str:
+    """Validate every test; return a one-line summary or raise DataError (all problems).
+    With the config ``cfg``, the summary also names the tests whose item the config does not
+    know (a bending test of no case, a tensile test of no covering): the pipeline leaves them
+    out."""
     manifest = read_manifest(data_dir)
     problems: list[str] = []
     n_samples = n_rows = 0
@@ -27,8 +31,19 @@ def check_data(data_dir: Path) -> str:
     if problems:
         raise DataError(problems)
     by_kind = ", ".join(f"{v} {k}" for k, v in sorted(kinds.items()))
+    unused = _unused_tests(manifest["tests"], cfg) if cfg is not None else []
     return (f"{data_dir}: OK: {len(manifest['tests'])} tests ({by_kind}), "
-            f"{n_samples} samples, {n_rows} rows")
+            f"{n_samples} samples, {n_rows} rows"
+            + (f"; not used by the config: {'; '.join(unused)}" if unused else ""))
+
+
+def _unused_tests(tests: dict, cfg: dict) -> list[str]:
+    """'test_id (item ... is not a ...)' for each test whose item the config has no use for."""
+    known = {"three_point": ({**cfg["cases"], **cfg["hifi"].get("extra_cases", {})}, "case"),
+             "tensile": (cfg["coverings"], "covering")}
+    return [f"{test_id} (item {entry['item']!r} is not a {known[entry['kind']][1]} of the config)"
+            for test_id, entry in tests.items()
+            if entry["kind"] in known and entry["item"] not in known[entry["kind"]][0]]
 
 
 def prepare_test(data_dir: Path, test_id: str, out_h5: Path, n_grid: int = 101) -> Path:
@@ -111,7 +126,15 @@ def _same_rows(displacement: np.ndarray, u: np.ndarray) -> bool:
 
 
 def read_prepared(path: Path) -> Prepared:
+    """The prepared test in ``path`` (as :func:`prepare_test` writes it); a file that is not
+    one: InputFileError naming it."""
+    check_hdf5(path, "a prepared test (HDF5)")
     with h5py.File(path, "r") as f:
+        missing = ([k for k in ("grid", "mean", "lo", "hi", "samples") if k not in f]
+                   + [k for k in ("test_id", "entry") if k not in f.attrs])
+        if missing:
+            raise InputFileError(f"{path}: not a prepared test: no {', '.join(missing)} "
+                                 "(harnesspipe prepare writes one)")
         samples = {name: {k: g[k][...] for k in g} for name, g in f["samples"].items()}
         return Prepared(str(f.attrs["test_id"]), json.loads(f.attrs["entry"]),
                         f["grid"][...], f["mean"][...], f["lo"][...], f["hi"][...], samples)

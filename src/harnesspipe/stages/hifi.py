@@ -11,9 +11,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pandas as pd
 
 from harnesspipe.config import ConfigError
+from harnesspipe.input_files import read_csv
 from harnesspipe.validate import (check, interface_problem, problem, stop_problem,
                                   tape_tension_problem)
 
@@ -47,7 +47,7 @@ def covering_properties(cfg: dict, table2: Path | None, values: dict | None = No
         if source != "paper":
             raise ConfigError(f"hifi.coverings: {source!r}: expected 'paper' or pass --coverings")
         return {k: dict(v) for k, v in cfg["paper"]["table2"].items()}
-    frame = pd.read_csv(table2, dtype=str)       # values as written, for the messages
+    frame = read_csv(table2, dtype=str)          # values as written, for the messages
     missing = {"component", "E", "sigma_y", "K", "n"} - set(frame.columns)
     if missing:
         raise ConfigError(f"{table2}: missing columns {sorted(missing)}")
@@ -58,6 +58,10 @@ def covering_properties(cfg: dict, table2: Path | None, values: dict | None = No
         if bad:
             raise ConfigError(bad[0])
         out[row.component] = {k: float(v) for k, v in values.items()}
+    absent = [c for c in COVERINGS if c not in out]
+    if absent:
+        raise ConfigError(f"{table2}: no row for {', '.join(absent)}: expected a Table 2 row "
+                          f"per covering ({', '.join(COVERINGS)})")
     return out
 
 
@@ -131,7 +135,7 @@ def interface_choice(cfg: dict, choice: str | Path) -> tuple[str, dict]:
     path = Path(choice)
     if not path.is_file():
         raise ConfigError(f"--interface {choice}: expected paper, start or an interface.csv file")
-    frame = pd.read_csv(path, dtype=str)
+    frame = read_csv(path, dtype=str)
     if list(frame.columns[:2]) != ["parameter", "value"]:
         raise ConfigError(f"{path}: line 1: expected the columns parameter,value")
     values = {}
@@ -139,10 +143,20 @@ def interface_choice(cfg: dict, choice: str | Path) -> tuple[str, dict]:
         if row.parameter not in INTERFACE_KEYS + BUILD_KEYS:
             raise ConfigError(f"{path}: line {line}: {row.parameter!r}: not an interface or build "
                               f"parameter (one of {', '.join(INTERFACE_KEYS + BUILD_KEYS)})")
+        if row.parameter in values:
+            raise ConfigError(f"{path}: line {line}: {row.parameter} given twice")
         bad = problem(row.parameter, row.value)
         if bad:
             raise ConfigError(f"{path}: line {line}: {row.parameter}={row.value}: {bad}")
         values[row.parameter] = float(row.value)
+    absent = [k for k in cfg["paper"]["interface"] if k not in values]
+    if absent:
+        raise ConfigError(f"{path}: no row for {', '.join(absent)}: an interface.csv gives every "
+                          "Sec. 4.2 parameter (to change one, --set it on top of --interface paper "
+                          "or start)")
+    relation = interface_problem(values)
+    if relation:
+        raise ConfigError(f"{path}: {relation}")
     return str(path), values
 
 
