@@ -41,6 +41,15 @@ def test_hifi_paths_are_checked_before_the_run(tmp_path, option, value, message)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]      # nothing written
 
 
+def test_hifi_default_outdir_in_the_way_stops_before_the_run(tmp_path):
+    (tmp_path / "curve_files").write_text("")
+    code, out, err = _hifi(tmp_path, "--interface", "paper")
+    assert code == 2 and _one_error_line(err) == (
+        f"harnesspipe: error: --out {tmp_path / 'curve.csv'}: {tmp_path / 'curve_files'} (the "
+        "default --outdir) is a file, expected a folder")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["curve_files"]
+
+
 @pytest.mark.parametrize("text, message", [
     ("", "{f}: empty, expected a CSV table with a header line"),
     (TABLE2.replace("closed_tube,1559,8.6,25.6,0.12\n", ""),

@@ -90,6 +90,15 @@ def _interface(cfg: dict, choice: str | None) -> tuple[str, dict]:
     return interface_choice(cfg, choice)
 
 
+def _outdir(args) -> Path:
+    """--outdir, by default OUT_files beside --out (checked here: argparse checks a given one)."""
+    from harnesspipe.cli import InputError
+    outdir = args.outdir or args.out.parent / f"{args.out.stem}_files"
+    if outdir.exists() and not outdir.is_dir():
+        raise InputError(f"--out {args.out}: {outdir} (the default --outdir) is a file, expected a folder")
+    return outdir
+
+
 def _wrote(*paths) -> None:
     print("wrote " + ", ".join(str(p) for p in paths))
 
@@ -106,7 +115,7 @@ def _three_point(args) -> int:
     shown.update((k, used["build"][k]) for k in interface if k in used["build"])
     print(f"interface: {label}: " + ", ".join(
         f"{k} {v:g}" + (" (--set)" if k in overrides else "") for k, v in shown.items()), flush=True)
-    outdir = args.outdir or args.out.parent / f"{args.out.stem}_files"
+    outdir = _outdir(args)
     summary_json = args.summary or outdir / "summary.json"
     progress = Progress(args.case)
     try:
@@ -130,7 +139,7 @@ def _branch(args) -> int:
     if args.t_total is not None and not args.t_total > 0:
         from harnesspipe.cli import InputError
         raise InputError(f"--t-total {args.t_total}: expected a positive time")
-    outdir = args.outdir or args.out.parent / f"{args.out.stem}_files"
+    outdir = _outdir(args)
     summary_json = args.summary or outdir / "summary.json"
     settings = settings_from_config(cfg, args.load_case, args.t_total)
     progress = Progress(f"branch {settings['load_case']}", travel="displacement")
