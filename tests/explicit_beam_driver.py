@@ -88,7 +88,7 @@ def wave_step(min_length: float, E: float, nu: float, rho: float) -> float:
 
 
 # -- kernels -------------------------------------------------------------------
-@njit
+@njit(cache=True)
 def lumped_beam_mass(X, conn, rho, A, Ip, m):
     """Lumped diagonal per dof (6 per node): rho A l/2 on translations, the scalar
     rotary inertia rho I_p l/2 on rotations, from each adjacent element."""
@@ -107,7 +107,7 @@ def lumped_beam_mass(X, conn, rho, A, Ip, m):
                 m[o + 3 + k] += h * Ip
 
 
-@njit
+@njit(cache=True)
 def gershgorin_omega2(band, bw, m, free):
     """Upper bound of the largest eigenvalue of M^-1/2 K M^-1/2 on the free dofs."""
     n = m.shape[0]
@@ -124,7 +124,7 @@ def gershgorin_omega2(band, bw, m, free):
     return best
 
 
-@njit
+@njit(cache=True)
 def kick(v, a, fint, fext, minv, free, hdt):
     """a = M^-1 (f_ext - f_int) and v += hdt a on the free dofs."""
     for i in range(v.shape[0]):
@@ -133,7 +133,7 @@ def kick(v, a, fint, fext, minv, free, hdt):
             v[i] += hdt * a[i]
 
 
-@njit
+@njit(cache=True)
 def half_work(f0, f1, du, idx):
     """sum over idx of 1/2 (f0 + f1) du (all dofs when idx is empty is not used)."""
     s = 0.0

@@ -10,6 +10,7 @@ from numba import njit
 
 @njit(cache=True, inline="always")
 def dot(a, b):
+    """a . b of two 3-vectors."""
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 

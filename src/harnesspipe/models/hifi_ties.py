@@ -139,21 +139,6 @@ class BundleTies:
             k = np.max(self.K_coh) * ties["tie_area"]
             ties["tie_c"] = 2.0 * zeta * np.sqrt(k * m1 * m2 / (m1 + m2))
 
-    def tie_step(self) -> float:
-        """Critical step of the stiffest cohesive tie: 2 sqrt(m_red / (K A)), with the reduced
-        mass of the tied node and the mean mass of its target's nodes."""
-        dt = np.inf
-        m = self.mass[:, 0]
-        for ties in self.ties:
-            m1 = m[ties["tie_node"]]
-            if ties["kind"] == "quad":
-                m2 = m[ties["quads"][ties["tie_quad"]]].mean(axis=1)
-            else:
-                m2 = m[self.seg[ties["tie_seg"]]].mean(axis=1)
-            k = np.max(self.K_coh) * ties["tie_area"]
-            dt = min(dt, float(np.min(2.0 * np.sqrt(m1 * m2 / (m1 + m2) / k))))
-        return dt
-
     def n_ties(self) -> int:
         return int(sum(t["tie_node"].size for t in self.ties))
 

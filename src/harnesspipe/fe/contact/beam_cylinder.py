@@ -367,6 +367,7 @@ def _counted(status, e, ne):
 
 @njit(cache=True)
 def _norm_diff(a, b):
+    """|a - b| of two 3-vectors."""
     return np.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
 
 

@@ -80,6 +80,7 @@ def fit_slot_history(hist, owners):
 
 @njit(cache=True)
 def share_node(conn, a, b):
+    """Elements ``a`` and ``b`` of ``conn`` have a node in common (neighbours never contact)."""
     for i in range(conn.shape[1]):
         for j in range(conn.shape[1]):
             if conn[a, i] == conn[b, j]:
@@ -103,6 +104,7 @@ def find_slot(hist_partner, conn, owner, partner):
 
 @njit(cache=True)
 def free_slot(hist_partner, owner):
+    """The first free history slot of ``owner`` (partner index < 0), -1 when all are taken."""
     for s in range(hist_partner.shape[1]):
         if hist_partner[owner, s] < 0:
             return s

@@ -65,6 +65,7 @@ def _cell_grid(lo_a, hi_a, lo_b, hi_b, cell):
 
 @njit(cache=True)
 def _cell_of(x, origin, cell, dims, k):
+    """Index along axis ``k`` of the grid cell holding coordinate ``x``, clamped to the grid."""
     c = int(math.floor((x - origin[k]) / cell))
     if c < 0:
         return 0
@@ -75,6 +76,7 @@ def _cell_of(x, origin, cell, dims, k):
 
 @njit(cache=True)
 def _lower_bound(keys, key):
+    """First index of the sorted ``keys`` whose key is not below ``key`` (binary search)."""
     lo = 0
     hi = keys.shape[0]
     while lo < hi:

@@ -17,6 +17,8 @@ from harnesspipe.fe.vec3 import any_perpendicular
 
 @njit(cache=True, parallel=True)
 def _candidates_quad(x, tape_nodes, quads, pairs, out_xi, out_gap, out_X, out_n):
+    """Each candidate (tape node, quad) pair's closest point on the quad: its parameters,
+    gap, point and normal."""
     for p in prange(pairs.shape[0]):
         i = pairs[p, 0]
         q = pairs[p, 1]
@@ -42,6 +44,8 @@ def _candidates_quad(x, tape_nodes, quads, pairs, out_xi, out_gap, out_X, out_n)
 
 @njit(cache=True, parallel=True)
 def _candidates_seg(x, tape_nodes, seg, pairs, out_s, out_dist):
+    """Each candidate (tape node, wire segment) pair's closest point on the segment (its
+    parameter s in [0, 1]) and distance."""
     for p in prange(pairs.shape[0]):
         i = pairs[p, 0]
         e = pairs[p, 1]

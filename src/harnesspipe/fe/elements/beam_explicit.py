@@ -405,7 +405,9 @@ def beam_plastic_work(conn, X0, w_g, sec_area, sec_id, mats, mat_id, alpha):
     """
     total = 0.0
     for e in range(conn.shape[0]):
-        l0 = np.sqrt(np.sum((X0[conn[e, 1]] - X0[conn[e, 0]]) ** 2))
+        a0, b0 = conn[e, 0], conn[e, 1]
+        l0 = np.sqrt((X0[b0, 0] - X0[a0, 0]) ** 2 + (X0[b0, 1] - X0[a0, 1]) ** 2
+                     + (X0[b0, 2] - X0[a0, 2]) ** 2)
         k = sec_id[e]
         sy = mats[mat_id[e], 1]
         K = mats[mat_id[e], 2]

@@ -84,6 +84,8 @@ def shell_forces(x, v, conn, thick, mat, state, dt, f_el, f_int, hg=HOURGLASS_CO
 
 @njit(cache=True)
 def _area_diag(x, i0, i1, i2, i3):
+    """(area, longer diagonal) of the quad i0-i1-i2-i3: the area half the norm of the
+    diagonals' cross product."""
     a0 = x[i2, 0] - x[i0, 0]
     a1 = x[i2, 1] - x[i0, 1]
     a2 = x[i2, 2] - x[i0, 2]
@@ -150,6 +152,8 @@ def shell_stable_step(x, conn, thick, mat, rho):
 
 @njit(cache=True)
 def _init_state(X, conn, thick, axes_ref, state):
+    """Each element's state row at rest: no stress or strain, its thickness, and the material
+    axis ``axes_ref`` expressed in the element's corotational frame."""
     ef = np.empty((3, 3))
     for e in range(conn.shape[0]):
         state[e, :] = 0.0
@@ -247,5 +251,6 @@ def element_frames(x, conn):
 
 @njit(cache=True)
 def _frames(x, conn, out):
+    """The corotational frame of every element at ``x`` into ``out`` (n_elements, 3, 3)."""
     for e in range(conn.shape[0]):
         frame(x, conn[e, 0], conn[e, 1], conn[e, 2], conn[e, 3], out[e])

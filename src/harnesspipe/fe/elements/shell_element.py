@@ -96,6 +96,7 @@ def shape(xi, eta, N, dN):
 
 @njit(cache=True)
 def _cross(a, b, out):
+    """out = a x b (3-vectors)."""
     out[0] = a[1] * b[2] - a[2] * b[1]
     out[1] = a[2] * b[0] - a[0] * b[2]
     out[2] = a[0] * b[1] - a[1] * b[0]
@@ -392,7 +393,7 @@ def _drill_strains(x, d, r, Jc, omega, f0, f1, t, w43):
     normal, p, rp = w43[0], w43[1], w43[2]
     for i in range(3):
         normal[i] = d[0, i] + d[1, i] + d[2, i] + d[3, i]
-    c1_len = np.sqrt(np.sum(f0 ** 2))
+    c1_len = np.sqrt(f0[0] ** 2 + f0[1] ** 2 + f0[2] ** 2)
     _cross(normal, f0, t)                       # in-plane, normal to c1 = f0/|f0|
     t_dot = np.dot(t, f0) / (c1_len * c1_len)
     for i in range(3):
