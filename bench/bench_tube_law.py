@@ -5,7 +5,7 @@ CWB run with the isotropic J2 equivalent shell and with the resultant law
 Run with the project's venv after a pipeline run (it reads the pipeline's Table 2, interface
 and prepared test data; without them, the paper's Table 2 and interface):
 ``.venv/bin/python bench/bench_tube_law.py [--profile quick] [--results results]``.
-Replaces the section "## Hi-fi tube wall law" of bench/RESULTS.md.
+Replaces the section "## Hi-fi tube wall law" of bench/RESULTS.md (keeping its notes by hand).
 
 Per run: relative l2 force error over 0.5-30 mm against the measured mean (the pipeline's
 fidelity measure, stages/hifi_chain.curve_vs_measured), the force at 5 / 10 / 20 / 30 mm,
@@ -20,7 +20,7 @@ import time
 from multiprocessing import Pool
 from pathlib import Path
 
-from benchlib import write_section
+from benchlib import section_tail, write_section
 
 HEADING = "## Hi-fi tube wall law"
 CASES = ("cwb19_t2_closed", "cwb19_t2_open_halflap", "cwb19_t2_open_coarse",
@@ -110,7 +110,7 @@ the stroke, energy balance error, wall time of one run [s] (one thread, two runs
 
 | case | wall law | rel. l2 error | F [N] | E_eff | KE/IE | energy error | wall [s] | measured F [N] |
 |---|---|---|---|---|---|---|---|---|
-""" + "\n".join(lines) + "\n"
+""" + "\n".join(lines) + "\n\n" + section_tail(HEADING)
     write_section(HEADING, text)
     print(json.dumps(rows, indent=1))
 
