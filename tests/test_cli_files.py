@@ -50,35 +50,26 @@ def test_hifi_default_outdir_in_the_way_stops_before_the_run(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["curve_files"]
 
 
-@pytest.mark.parametrize("text, message", [
-    ("", "{f}: empty, expected a CSV table with a header line"),
-    (TABLE2.replace("closed_tube,1559,8.6,25.6,0.12\n", ""),
+@pytest.mark.parametrize("option, text, message", [
+    ("--coverings", "", "{f}: empty, expected a CSV table with a header line"),
+    ("--coverings", TABLE2.replace("closed_tube,1559,8.6,25.6,0.12\n", ""),
      "{f}: no row for closed_tube: expected a Table 2 row per covering (closed_tube, open_tube, "
      "fabric_tube)"),
-    (TABLE2.replace("0.12\n", "0.12,9\n"), "{f}: line 2: 6 fields, expected 5 (component,E,sigma_y,K,n)"),
-])
-def test_hifi_unreadable_table2_is_named(tmp_path, text, message):
-    table2 = tmp_path / "table2.csv"
-    table2.write_text(text)
-    code, _, err = _hifi(tmp_path, "--coverings", table2)
-    assert code == 2
-    assert _one_error_line(err) == "harnesspipe: error: " + message.format(f=table2)
-
-
-@pytest.mark.parametrize("text, message", [
-    ("parameter,value\n", "{f}: no row for mu_rtb, mu_rtp, delta0, delta_f, alpha_d, E2_over_E1: "
-                          "an interface.csv gives every Sec. 4.2 parameter (to change one, --set it "
-                          "on top of --interface paper or start)"),
-    (INTERFACE.replace("delta_f,0.08", "delta_f,0.01"),
+    ("--coverings", TABLE2.replace("0.12\n", "0.12,9\n"),
+     "{f}: line 2: 6 fields, expected 5 (component,E,sigma_y,K,n)"),
+    ("--interface", "parameter,value\n",
+     "{f}: no row for mu_rtb, mu_rtp, delta0, delta_f, alpha_d, E2_over_E1: an interface.csv "
+     "gives every Sec. 4.2 parameter (to change one, --set it on top of --interface paper or start)"),
+    ("--interface", INTERFACE.replace("delta_f,0.08", "delta_f,0.01"),
      "{f}: delta_f=0.01: expected a failure separation > delta0 (0.03)"),
-    (INTERFACE + "mu_rtb,0.2\n", "{f}: line 8: mu_rtb given twice"),
+    ("--interface", INTERFACE + "mu_rtb,0.2\n", "{f}: line 8: mu_rtb given twice"),
 ])
-def test_hifi_incomplete_interface_file_is_named(tmp_path, text, message):
-    interface = tmp_path / "interface.csv"
-    interface.write_text(text)
-    code, _, err = _hifi(tmp_path, "--interface", interface)
+def test_hifi_unreadable_table2_or_interface_is_named(tmp_path, option, text, message):
+    given = tmp_path / "given.csv"
+    given.write_text(text)
+    code, _, err = _hifi(tmp_path, option, given)
     assert code == 2
-    assert _one_error_line(err) == "harnesspipe: error: " + message.format(f=interface)
+    assert _one_error_line(err) == "harnesspipe: error: " + message.format(f=given)
 
 
 def test_a_tape_tension_beyond_the_tapes_yield_stops_the_config_and_the_catalogue(tmp_path):
