@@ -230,6 +230,8 @@ def _cli(*args):
      "100 mm span (< 50 mm)"),
     ("case,E,sigma_y,K,n\ncwb19_t2_closed,15.7,0.6,1.59,0.3\ncwb19_t2_fabric,0,0.25,5.65,0.24\n",
      "lsdyna", "{t}: line 3 (case cwb19_t2_fabric): E = 0.0: expected a modulus [MPa] > 0"),
+    ("case,E,sigma_y,K,n\ncwb19_t2_closed,15.7,0.6,1.59,0.3,0.4\n", "calculix",
+     "{t}: line 2: 6 fields, expected 5 (case,E,sigma_y,K,n)"),
     ("case,E,sigma_y,K,n\nnew_bundle,15.7,0.6,1.59,0.3\n", "abaqus",
      "{t}: line 2 (case new_bundle): no r_o column and no case 'new_bundle' in config.yaml "
      "(cases, hifi.extra_cases): the section radius is unknown"),

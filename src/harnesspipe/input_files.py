@@ -51,13 +51,13 @@ def read_json(path):
         raise InputFileError(f"{path}: not a JSON text file") from None
 
 
-def check_hdf5(path, what: str = "an HDF5 file") -> Path:
-    """``path`` if it is a complete HDF5 file (h5py's signature and superblock checks)."""
+def open_hdf5(path, what: str = "an HDF5 file"):
+    """``path`` opened read-only with h5py if it is a complete HDF5 file (h5py's signature
+    and superblock checks); use it as a context manager."""
     import h5py
     path = Path(path)
     try:
-        with h5py.File(path, "r"):
-            return path
+        return h5py.File(path, "r")
     except OSError as exc:
         reason = "truncated" if "truncated" in str(exc) else "not HDF5"
         raise InputFileError(f"{path}: cannot be read as {what} ({reason})") from None

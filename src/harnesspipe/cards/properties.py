@@ -28,8 +28,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-import pandas as pd
-
+from harnesspipe.input_files import InputFileError, read_csv
 from harnesspipe.models.rom_beam import Material
 from harnesspipe.stages import chain_settings as chain
 from harnesspipe.validate import deflection_problem, problem
@@ -38,7 +37,7 @@ REQUIRED = ("case", "E", "sigma_y", "K", "n")
 CASE_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,63}$")   # a folder and a solver label
 
 
-class TableError(ValueError):
+class TableError(InputFileError):
     """A property table that cannot be carded (missing file, column or value)."""
 
 
@@ -77,10 +76,7 @@ def read_table(path, config: dict, config_name: str = "config"
     path = Path(path)
     if not path.is_file():
         raise TableError(f"{path}: property table not found")
-    try:
-        frame = pd.read_csv(path, dtype={"case": str})
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise TableError(f"{path}: not a readable CSV table: {str(exc).splitlines()[0]}") from None
+    frame = read_csv(path, dtype={"case": str})
     missing = [c for c in REQUIRED if c not in frame.columns]
     if missing:
         raise TableError(f"{path}: missing column {', '.join(missing)} "

@@ -147,7 +147,8 @@ def synthesize(cfg: dict, out: Path, generators: list[str] | None = None) -> Pat
     names = generators or sorted(GENERATORS)
     unknown = [n for n in names if n not in GENERATORS]
     if unknown:
-        raise DataError([f"synthesize --only: unknown generator(s) {unknown}; available: {sorted(GENERATORS)}"])
+        raise DataError([f"synthesize --only: unknown generator(s) {unknown}; "
+                         f"available: {sorted(GENERATORS)}"])
     syn = cfg["synthesize"]
     out = Path(out)
     specs = [spec for name in names for spec in GENERATORS[name](cfg)]

@@ -9,7 +9,7 @@ import h5py
 import numpy as np
 
 from harnesspipe.data.experimental import DataError, load_test, read_manifest
-from harnesspipe.input_files import InputFileError, check_hdf5
+from harnesspipe.input_files import InputFileError, open_hdf5
 
 
 def check_data(data_dir: Path, cfg: dict | None = None) -> str:
@@ -128,8 +128,7 @@ def _same_rows(displacement: np.ndarray, u: np.ndarray) -> bool:
 def read_prepared(path: Path) -> Prepared:
     """The prepared test in ``path`` (as :func:`prepare_test` writes it); a file that is not
     one: InputFileError naming it."""
-    check_hdf5(path, "a prepared test (HDF5)")
-    with h5py.File(path, "r") as f:
+    with open_hdf5(path, "a prepared test (HDF5)") as f:
         missing = ([k for k in ("grid", "mean", "lo", "hi", "samples") if k not in f]
                    + [k for k in ("test_id", "entry") if k not in f.attrs])
         if missing:
