@@ -24,7 +24,8 @@ FAMILY_KERNELS = ("beams", "shells", "wire-wire contact", "node-facet contact",
 
 def history_arrays(s) -> list:
     """Every array a force call of the pinned bundle ``s`` updates in place."""
-    arrays = [*s.wires.hist, s.sstate, *s.ww_hist]
+    b = s.wires.beams
+    arrays = [b.eps_p, b.alpha, b.sa_h, s.sstate, *s.ww_hist]
     arrays += [h for fs in s.facet_sets for h in fs["hist"]]
     arrays += [t[k] for t in s.ties for k in ("tie_kappa", "tie_D", "tie_energy")]
     arrays += [s.wire_pins["hist"], s.pins.force]

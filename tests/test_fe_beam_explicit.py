@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from harnesspipe.fe.elements.beam import assemble_beams, initial_frames, lobatto_points
-from harnesspipe.fe.elements.beam_explicit import (beam_forces, beam_lumped_mass, beam_plastic_work,
-                                                   beam_stable_step)
+from harnesspipe.fe.elements.beam_explicit import (Beams, beam_forces, beam_lumped_mass,
+                                                   beam_plastic_work, beam_stable_step)
 from harnesspipe.fe.materials.fiber import disc_fibres
 from harnesspipe.fe.rotation import rotate_nodes
 
@@ -47,8 +47,8 @@ def test_parallel_forces_equal_assembled_beams_per_body():
     f_el = np.zeros((n_el, 12))
     f_int = np.zeros((X.shape[0], 6))
     sec = [np.ascontiguousarray(np.stack([s[k] for s in secs])) for k in range(3)]
-    beam_forces(X, conn, R0, X + u, quat, xi, w, sec[0], sec[1], sec[2], GJ, sec_id,
-                mats, sec_id.copy(), *hist, f_el, f_int, 2)
+    beams = Beams(X, conn, R0, xi, w, *sec, GJ, sec_id, mats, sec_id.copy(), *hist, f_el)
+    beam_forces(beams, X + u, quat, f_int, 2)
     for body in (0, 1):
         sl = slice(body * half, (body + 1) * half)
         h = [np.zeros((half, ng, nf)) for _ in range(4)]
@@ -64,7 +64,7 @@ def test_parallel_forces_equal_assembled_beams_per_body():
         np.testing.assert_allclose(hist[2][sl], h[3] ** mats[body, 3], rtol=1e-13)   # alpha^n
     assert np.abs(f_int).max() > 1.0            # the state is strained (yielded)
     assert hist[1].max() > 0.0
-    W = beam_plastic_work(conn, X, w, sec[2], sec_id, mats, sec_id, hist[1])
+    W = beam_plastic_work(beams)
     assert W > 0.0
 
 
@@ -94,12 +94,12 @@ def test_lumped_mass_total_and_stable_step_bounds_a_free_vibration():
         quat[:, 0] = 1.0
         rng = np.random.default_rng(0)
         v = rng.normal(scale=1.0, size=m.shape)        # all modes excited
-        f_el = np.zeros((n_el, 12))
+        beams = Beams(X, conn, R0, xi, w, *sec, np.array([E / 2.78 * 2 * I]), ids, mats, ids,
+                      *hist, np.zeros((n_el, 12)))
         f = np.zeros_like(m)
         for _ in range(steps):
             f[:] = 0.0
-            beam_forces(X, conn, R0, x, quat, xi, w, *sec, np.array([E / 2.78 * 2 * I]), ids,
-                        mats, ids, *hist, f_el, f, 2)
+            beam_forces(beams, x, quat, f, 2)
             v -= dt * f / m
             x += dt * v[:, :3]
             rotate_nodes(quat, np.ascontiguousarray(dt * v[:, 3:]))
@@ -169,11 +169,13 @@ def test_lean_forces_equal_element_response_at_large_rotations_with_yielding(see
         f = np.zeros((X.shape[0], 6))
         if fun is beam_forces:                      # the committed history, advanced in place
             h = [eps_p_c.copy(), alpha_c.copy(), sa_c.copy()]
-            fun(X, conn, R0, x, quat, xi, w, *sec, GJ, sec_id, mats, mat_id, *h, f_el, f, nch)
+            fun(Beams(X, conn, R0, xi, w, *sec, GJ, sec_id, mats, mat_id, *h, f_el), x, quat,
+                f, nch)
         else:                                       # committed read, trial written
             h = [np.zeros((n_el, ng, nf)) for _ in range(3)]
-            fun(X, conn, R0, x, quat, xi, w, *sec, GJ, sec_id, mats, mat_id, eps_p_c, alpha_c,
-                sa_c, *h, f_el, f, nch)
+            committed = Beams(X, conn, R0, xi, w, *sec, GJ, sec_id, mats, mat_id, eps_p_c,
+                              alpha_c, sa_c, f_el)
+            fun(committed, committed._replace(eps_p=h[0], alpha=h[1], sa_h=h[2]), x, quat, f, nch)
         out.append((f_el, f, h))
     (fe, f, h), (fe_r, f_r, h_r), (fe_1, f_1, h_1) = out
     scale = np.abs(fe_r).max(axis=1, keepdims=True)

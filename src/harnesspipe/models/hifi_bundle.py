@@ -18,8 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harnesspipe.fe.assembly.groups import (Beams, CohesiveLaw, FacetSets, Forces, Shells,
-                                            WireContact)
+from harnesspipe.fe.assembly.groups import CohesiveLaw, FacetSets, Forces, Shells, WireContact
 from harnesspipe.fe.assembly.lanes import (BeamSplit, bundle_forces, check_disjoint, no_pins,
                                            stack_groups)
 from harnesspipe.fe.contact.common import DEFAULT_MAXS, fit_slot_history, new_slot_history
@@ -495,11 +494,9 @@ class BundleSystem(BundleTies):
     def _make_lane_groups(self, F) -> dict:
         """The named groups of :func:`bundle_forces` (:mod:`harnesspipe.fe.assembly.groups`)."""
         w, itf = self.wires, self.inp.interface
-        eps_p, alpha, sa_h = w.hist
         pins, wire_pins, pin_facets = self.pin_args
         return dict(
-            beams=Beams(w.X0, w.conn, w.R0, w.xi_g, w.w_g, w.sec_y, w.sec_z, w.sec_area,
-                        w.sec_GJ, w.sec_id, w.mats, eps_p, alpha, sa_h, w.f_el),
+            beams=w.beams,
             shells=Shells(self.sconn, self.sthick, self.smat, self.sstate, self.s_el,
                           HOURGLASS_COEF),
             wires=WireContact(self.seg, self.seg_r, self.seg_body, self.ww_pairs, self.k_ww,

@@ -9,8 +9,8 @@ import numba
 import numpy as np
 
 from harnesspipe.fe.elements.beam import initial_frames, lobatto_points
-from harnesspipe.fe.elements.beam_explicit import (beam_forces, beam_lumped_mass, beam_plastic_work,
-                                                   beam_stable_step)
+from harnesspipe.fe.elements.beam_explicit import (Beams, beam_forces, beam_lumped_mass,
+                                                   beam_plastic_work, beam_stable_step)
 from harnesspipe.fe.materials.fiber import disc_fibres
 from harnesspipe.fe.solvers.central_difference import prescribed_work, rate_ramp
 
@@ -39,8 +39,10 @@ class Wires:
         self.mats = np.array([[t["E"], t["sigma_y"], t["K"], t["n"]] for t in types])
         self.rho = np.array([f_m * t["rho"] for t in types])
         n_el, ng, nf = self.conn.shape[0], self.xi_g.size, self.sec_y.shape[1]
-        self.hist = np.zeros((3, n_el, ng, nf))      # eps_p, alpha, alpha**n per fibre (in place)
-        self.f_el = np.zeros((n_el, 12))
+        eps_p, alpha, sa_h = np.zeros((3, n_el, ng, nf))   # fibre history (in place)
+        self.beams = Beams(self.X0, self.conn, self.R0, self.xi_g, self.w_g, self.sec_y,
+                           self.sec_z, self.sec_area, self.sec_GJ, self.sec_id, self.mats,
+                           self.sec_id, eps_p, alpha, sa_h, np.zeros((n_el, 12)))
         self.n_chunks = numba.get_num_threads()   # element chunks (any number gives the same forces)
         self.nodes = np.unique(self.conn)
 
@@ -67,13 +69,10 @@ class Wires:
 
     def add_forces(self, x, quat, f_on_nodes):
         """Add the element forces ON the nodes (minus the internal force) into ``f_on_nodes``."""
-        beam_forces(self.X0, self.conn, self.R0, x, quat, self.xi_g, self.w_g, self.sec_y,
-                    self.sec_z, self.sec_area, self.sec_GJ, self.sec_id, self.mats, self.sec_id,
-                    *self.hist, self.f_el, f_on_nodes, self.n_chunks, -1.0)
+        beam_forces(self.beams, x, quat, f_on_nodes, self.n_chunks, -1.0)
 
     def plastic_work(self):
-        return beam_plastic_work(self.conn, self.X0, self.w_g, self.sec_area, self.sec_id,
-                                 self.mats, self.sec_id, self.hist[1])
+        return beam_plastic_work(self.beams)
 
 
 class Pins:

@@ -6,6 +6,9 @@ two arrays of the same type can no longer be swapped by a reordering.  The group
 arrays are the system's own (updated in place: histories, forces); the system makes the
 groups once and again when an array is replaced (after a contact search).
 
+The beams' group, :class:`harnesspipe.fe.elements.beam_explicit.Beams`, lives with the
+beam kernels that take it and is imported from there.
+
 Stacked groups (node-facet sets, tie groups, pin-facet groups) hold their members'
 arrays one after the other (:func:`harnesspipe.fe.assembly.lanes.stack_groups`),
 member ``g`` at rows ``off[g] .. off[g + 1] - 1`` of each array.
@@ -16,25 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-
-class Beams(NamedTuple):
-    """Co-rotational fibre beams (:func:`harnesspipe.fe.elements.beam_explicit.beam_forces`);
-    the beams' material ids are their section ids."""
-    X0: np.ndarray          # (n_nodes, 3) initial positions
-    conn: np.ndarray        # (n_el, 2) node ids
-    R0: np.ndarray          # (n_el, 3, 3) initial element frames
-    xi_g: np.ndarray        # (ng,) Gauss-Lobatto points along the element
-    w_g: np.ndarray         # (ng,) their weights
-    sec_y: np.ndarray       # (n_sec, nf) fibre coordinates in the section
-    sec_z: np.ndarray       # (n_sec, nf)
-    sec_area: np.ndarray    # (n_sec, nf) fibre areas
-    sec_GJ: np.ndarray      # (n_sec,) torsional stiffness
-    sec_id: np.ndarray      # (n_el,) section (and material) of each element
-    mats: np.ndarray        # (n_mat, 4) material rows (E, sigma_y, K, n)
-    eps_p: np.ndarray       # (n_el, ng, nf) fibre plastic strain, in place
-    alpha: np.ndarray       # (n_el, ng, nf) equivalent plastic strain, in place
-    sa_h: np.ndarray        # (n_el, ng, nf) alpha**n, in place
-    f_el: np.ndarray        # (n_el, 12) element forces (scratch)
+from harnesspipe.fe.elements.beam_explicit import Beams   # noqa: F401  (the beams' group)
 
 
 class Shells(NamedTuple):

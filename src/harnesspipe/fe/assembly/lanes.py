@@ -86,9 +86,7 @@ def bundle_forces(x, quat, v, dt, time_scale, beam_split, beams, shells, wires, 
 @njit(cache=True)
 def _beam_range(lo, hi, x, quat, b):
     """Element forces of the beams ``lo .. hi - 1`` into ``b.f_el``."""
-    beam_range_forces(lo, hi, b.X0, b.conn, b.R0, x, quat, b.xi_g, b.w_g, b.sec_y, b.sec_z,
-                      b.sec_area, b.sec_GJ, b.sec_id, b.mats, b.sec_id, b.eps_p, b.alpha,
-                      b.sa_h, b.f_el)
+    beam_range_forces(lo, hi, b, x, quat)
 
 
 @njit(cache=True)

@@ -29,6 +29,8 @@ critical step from below; the elastic stiffness bounds the elastoplastic one.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit, prange
 
@@ -40,20 +42,65 @@ from harnesspipe.fe.rotation import log_matrix, ts_inverse_coeff
 PARALLEL_MIN_EL = 64   # fewer elements per thread than this: one chunk (thread overhead)
 
 
+class Beams(NamedTuple):
+    """Co-rotational fibre beams, the one argument group of the kernels of this module.
+
+    Numba passes it as one typed tuple: a kernel reads ``beams.conn``, not its 12th
+    positional argument.  The arrays are the owner's own; the history and ``f_el`` are
+    updated in place."""
+    X0: np.ndarray          # (n_nodes, 3) initial positions
+    conn: np.ndarray        # (n_el, 2) node ids
+    R0: np.ndarray          # (n_el, 3, 3) initial element frames
+    xi_g: np.ndarray        # (ng,) Gauss-Lobatto points along the element
+    w_g: np.ndarray         # (ng,) their weights
+    sec_y: np.ndarray       # (n_sec, nf) fibre coordinates in the section
+    sec_z: np.ndarray       # (n_sec, nf)
+    sec_area: np.ndarray    # (n_sec, nf) fibre areas
+    sec_GJ: np.ndarray      # (n_sec,) torsional stiffness
+    sec_id: np.ndarray      # (n_el,) section of each element
+    mats: np.ndarray        # (n_mat, 4) eq. 2 material rows (E, sigma_y, K, n)
+    mat_id: np.ndarray      # (n_el,) material row of each element
+    eps_p: np.ndarray       # (n_el, ng, nf) fibre plastic strain, in place
+    alpha: np.ndarray       # (n_el, ng, nf) equivalent plastic strain, in place
+    sa_h: np.ndarray        # (n_el, ng, nf) alpha**n, in place
+    f_el: np.ndarray        # (n_el, 12) element forces (scratch)
+
+
+class BeamScratch(NamedTuple):
+    """Work arrays of :func:`element_force`, allocated once per element range."""
+    Rg: np.ndarray          # (2, 3, 3) the nodal rotation matrices
+    W: np.ndarray           # (4, 3, 3) Rg1 R0, Rg2 R0, Rr, qv
+    Rbar: np.ndarray        # (3, 3)
+    th1: np.ndarray         # (3,) local rotation of node 1
+    th2: np.ndarray         # (3,) of node 2
+    v4: np.ndarray          # (4,) log_matrix work
+
+
 @njit(cache=True)
-def _section_force(e0, kappa_y, kappa_z, y, z, area, eps_p, alpha, sa_h, e, g, E, sigma_y, K,
-                   n):
-    """Stress resultants ``(N, M_y, M_z)`` of the fibre section, no tangent.
+def beam_scratch():
+    """A fresh :class:`BeamScratch`."""
+    return BeamScratch(np.empty((2, 3, 3)), np.empty((4, 3, 3)), np.empty((3, 3)),
+                       np.empty(3), np.empty(3), np.empty(4))
+
+
+@njit(cache=True)
+def _section_force(e0, kappa_y, kappa_z, sec, mat, beams, e, g):
+    """Stress resultants ``(N, M_y, M_z)`` of the fibre section ``sec``
+    (:class:`~harnesspipe.fe.elements.beam.FibreSection`) of eq. 2 material ``mat``
+    (:class:`~harnesspipe.fe.elements.beam.FibreMaterial`), no tangent.
 
     The fibre strain, eq. 2 return and summation order of
     :func:`harnesspipe.fe.materials.fiber.section_response`; the section tangent ``D`` is not formed,
     and each fibre keeps ``sa = alpha**n`` in its history, so its flow stress
     ``sigma_Y + K sa`` (the elastic check) and the return map's start need no power
     (:func:`harnesspipe.fe.materials.hardening.return_map_from`): the same results up to round-off.
-    History of element ``e``, Gauss point ``g``: ``eps_p, alpha, sa_h`` read and, for a
-    fibre that yields, updated in place (an explicit step is never rejected, so there is
+    History of element ``e``, Gauss point ``g``: ``beams.eps_p, alpha, sa_h`` read and, for
+    a fibre that yields, updated in place (an explicit step is never rejected, so there is
     no trial state; an elastic fibre's history is only read).
     """
+    y, z, area = sec.y, sec.z, sec.area
+    E, sigma_y, K, n = mat.E, mat.sigma_y, mat.K, mat.n
+    eps_p, alpha, sa_h = beams.eps_p, beams.alpha, beams.sa_h
     s0 = s1 = s2 = 0.0
     for f in range(y.shape[0]):
         yf = y[f]
@@ -159,16 +206,16 @@ def _local_rotation(W, node, Rbar, theta, v4):
 
 
 @njit(cache=True, inline="always")
-def _local_force(e, ln, l0, th1, th2, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n, eps_p,
-                 alpha, sa_h):
+def _local_force(e, ln, l0, th1, th2, sec, mat, beams):
     """Local force of the small-strain Bernoulli element (the arithmetic and summation
     order of :func:`harnesspipe.fe.elements.beam.local_bernoulli`): the axial force N and
     the bending moments at the nodes ``(f2, f3)``, ``(f5, f6)`` from the fibre resultants
-    (:func:`_section_force`) integrated over the Gauss-Lobatto points ``xi_g, w_g``
-    (ng,) with the strains ``e0 = (l_n - l_0)/l_0``, ``kappa = ((6 xi - 4) theta_1 +
+    (:func:`_section_force`) integrated over the Gauss-Lobatto points ``beams.xi_g,
+    w_g`` (ng,) with the strains ``e0 = (l_n - l_0)/l_0``, ``kappa = ((6 xi - 4) theta_1 +
     (6 xi - 2) theta_2)/l_0``, and the elastic torque ``GJ (theta_2x - theta_1x)/l_0``.
-    Fibre section ``y, z, area`` (nf,); history of element ``e`` in ``eps_p, alpha, sa_h``
-    (n_el, ng, nf).  Returns (N, f2, f3, f5, f6, torque)."""
+    Section ``sec``, material ``mat``, history of element ``e`` in ``beams``.
+    Returns (N, f2, f3, f5, f6, torque)."""
+    xi_g, w_g = beams.xi_g, beams.w_g
     f0 = f2 = f3 = f5 = f6 = 0.0
     e0 = (ln - l0) / l0
     inv_l0 = 1.0 / l0
@@ -178,15 +225,14 @@ def _local_force(e, ln, l0, th1, th2, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, 
         b2 = (6.0 * xi - 2.0) / l0
         ky = b1 * th1[1] + b2 * th2[1]
         kz = b1 * th1[2] + b2 * th2[2]
-        s0, s1, s2 = _section_force(e0, ky, kz, y, z, area, eps_p, alpha, sa_h, e, g, E,
-                                    sigma_y, K, n)
+        s0, s1, s2 = _section_force(e0, ky, kz, sec, mat, beams, e, g)
         wl = w_g[g] * l0
         f0 += (wl * inv_l0) * s0
         f2 += (wl * b1) * s1
         f5 += (wl * b2) * s1
         f3 += (wl * b1) * s2
         f6 += (wl * b2) * s2
-    return f0, f2, f3, f5, f6, GJ / l0 * (th2[0] - th1[0])
+    return f0, f2, f3, f5, f6, sec.GJ / l0 * (th2[0] - th1[0])
 
 
 @njit(cache=True, inline="always")
@@ -230,14 +276,13 @@ def _global_force(e, f_el, W, ln, th1, th2, N, f2, f3, f5, f6, torque):
 
 
 @njit(cache=True)
-def element_force(e, a, b, X0, x, R0, Rg, ia, ib, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n,
-                  eps_p, alpha, sa_h, f_el, W, Rbar, th1, th2, v4):
-    """Global internal force ``f_el[e]`` (12) of element ``e`` (nodes ``a, b``), lean path.
+def element_force(e, beams, x, ia, ib, work):
+    """Global internal force ``beams.f_el[e]`` (12) of element ``e``, lean path.
 
     Equals ``element_response(..., want_tangent=False)`` of :mod:`harnesspipe.fe.elements.beam`;
-    ``Rg[ia]``, ``Rg[ib]`` hold the nodal rotation matrices (quat_to_matrix of
-    ``quat[a]``, ``quat[b]``).  The co-rotated frame, the local rotations, the fibre
-    resultants and the new history use the arithmetic of element_response
+    ``work.Rg[ia]``, ``work.Rg[ib]`` hold the rotation matrices of the element's nodes
+    (quat_to_matrix of their quaternions).  The co-rotated frame, the local rotations,
+    the fibre resultants and the new history use the arithmetic of element_response
     (bit-identical); only the final mapping differs in round-off, because only what the
     force needs is formed:
 
@@ -247,22 +292,25 @@ def element_force(e, a, b, X0, x, R0, Rg, ia, ib, xi_g, w_g, y, z, area, GJ, E, 
     * ``f_g = B^T f_a`` from the ten nonzeros of ``G^T`` in closed form (no 7x12 B matrix);
     * no section tangent D, no K_l, K_a, K_h, K_m.
 
-    ``X0``/``x`` (n_nodes, 3) reference and current positions, ``R0`` (n_el, 3, 3)
-    initial frames, ``Rg`` (2, 3, 3), ``xi_g, w_g`` (ng,), fibre section ``y, z, area``
-    (nf,) and ``GJ``, eq. 2 material ``E, sigma_y, K, n``, history ``eps_p, alpha, sa_h``
-    (n_el, ng, nf) updated in place where a fibre yields, ``f_el`` (n_el, 12).  Arrays
-    are indexed in place (no per-element views).  Work: W (4, 3, 3) holding Rg1 R0,
-    Rg2 R0, Rr, qv; Rbar (3, 3), th1, th2 (3), v4 (4).
+    ``x`` (n_nodes, 3) current positions; the element's section, material and history
+    are those of ``beams`` (history updated in place where a fibre yields); arrays are
+    indexed in place (section rows are views).  ``work``: :class:`BeamScratch`.
     """
-    _nodal_triads(e, R0, Rg, ia, ib, W)
+    a = beams.conn[e, 0]
+    b = beams.conn[e, 1]
+    k = beams.sec_id[e]
+    m = beams.mat_id[e]
+    X0, W = beams.X0, work.W
+    sec = FibreSection(beams.sec_y[k], beams.sec_z[k], beams.sec_area[k], beams.sec_GJ[k])
+    mat = FibreMaterial(beams.mats[m, 0], beams.mats[m, 1], beams.mats[m, 2], beams.mats[m, 3])
+    _nodal_triads(e, beams.R0, work.Rg, ia, ib, W)
     ln = _corotated_frame(x, a, b, W)
     l0 = np.sqrt((X0[b, 0] - X0[a, 0]) ** 2 + (X0[b, 1] - X0[a, 1]) ** 2
                  + (X0[b, 2] - X0[a, 2]) ** 2)
-    _local_rotation(W, 0, Rbar, th1, v4)
-    _local_rotation(W, 1, Rbar, th2, v4)
-    N, f2, f3, f5, f6, torque = _local_force(e, ln, l0, th1, th2, xi_g, w_g, y, z, area, GJ, E,
-                                             sigma_y, K, n, eps_p, alpha, sa_h)
-    _global_force(e, f_el, W, ln, th1, th2, N, f2, f3, f5, f6, torque)
+    _local_rotation(W, 0, work.Rbar, work.th1, work.v4)
+    _local_rotation(W, 1, work.Rbar, work.th2, work.v4)
+    N, f2, f3, f5, f6, torque = _local_force(e, ln, l0, work.th1, work.th2, sec, mat, beams)
+    _global_force(e, beams.f_el, W, ln, work.th1, work.th2, N, f2, f3, f5, f6, torque)
 
 
 @njit(cache=True, inline="always")
@@ -284,63 +332,48 @@ def _quat_to_matrix_at(quat, a, Rg, i):
 
 
 @njit(cache=True, parallel=True)
-def beam_forces(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area, sec_GJ, sec_id,
-                mats, mat_id, eps_p, alpha, sa_h, f_el, f_int, n_chunks, sign=1.0):
-    """Add ``sign`` x the internal (resisting) forces of all beam elements into ``f_int``
-    (n_nodes, 6) (``sign = -1``: the forces ON the nodes).
+def beam_forces(beams, x, quat, f_int, n_chunks, sign=1.0):
+    """Add ``sign`` x the internal (resisting) forces of all elements of ``beams``
+    (:class:`Beams`) into ``f_int`` (n_nodes, 6) (``sign = -1``: the forces ON the nodes).
 
-    ``X0``/``x`` (n_nodes, 3) reference and current positions, ``quat`` (n_nodes, 4) nodal
-    rotations, ``conn`` (n_el, 2) global node ids, ``R0`` (n_el, 3, 3) initial frames;
-    ``sec_y, sec_z, sec_area`` (n_sec, n_fib) fibre data, ``sec_GJ`` (n_sec,);
-    ``mats`` (n_mat, 4) rows (E, sigma_y, K, n); history (n_el, n_gauss, n_fib)
-    ``eps_p, alpha, sa_h`` (``sa_h = alpha**n``), updated in place where a fibre yields
-    (explicit steps are never rejected: every call advances the history); ``f_el``
-    (n_el, 12) scratch; ``n_chunks`` the number of parallel chunks
+    ``x`` (n_nodes, 3) current positions, ``quat`` (n_nodes, 4) nodal rotations; the
+    history ``beams.eps_p, alpha, sa_h`` (``sa_h = alpha**n``) advances in place where a
+    fibre yields (explicit steps are never rejected: every call advances the history);
+    ``beams.f_el`` is scratch; ``n_chunks`` the number of parallel chunks
     (``numba.get_num_threads()``).
 
     Lean force-only path (:func:`element_force`) over contiguous chunks of elements
     (:func:`beam_range_forces`).  With fewer than ``PARALLEL_MIN_EL`` elements per chunk
     the chunks are merged.
     """
-    n_el = conn.shape[0]
+    n_el = beams.conn.shape[0]
     n_chunks = max(1, min(n_chunks, n_el // PARALLEL_MIN_EL))
     size = (n_el + n_chunks - 1) // n_chunks
     for c in prange(n_chunks):
-        beam_range_forces(c * size, min(n_el, (c + 1) * size), X0, conn, R0, x, quat, xi_g,
-                          w_g, sec_y, sec_z, sec_area, sec_GJ, sec_id, mats, mat_id, eps_p,
-                          alpha, sa_h, f_el)
-    beam_scatter(conn, f_el, f_int, sign)
+        beam_range_forces(c * size, min(n_el, (c + 1) * size), beams, x, quat)
+    beam_scatter(beams.conn, beams.f_el, f_int, sign)
 
 
 @njit(cache=True)
-def beam_range_forces(lo, hi, X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area,
-                      sec_GJ, sec_id, mats, mat_id, eps_p, alpha, sa_h, f_el):
-    """Element forces of elements ``lo..hi-1`` into ``f_el`` (arguments as
+def beam_range_forces(lo, hi, beams, x, quat):
+    """Element forces of elements ``lo..hi-1`` into ``beams.f_el`` (arguments as
     :func:`beam_forces`).  The rotation matrix of a node shared with the previous
     element of a chain (``conn[e, 0] == conn[e - 1, 1]``) is reused, not rebuilt from
     its quaternion; scratch is allocated once per call."""
-    W = np.empty((4, 3, 3))
-    Rbar = np.empty((3, 3))
-    Rg = np.empty((2, 3, 3))
-    th1 = np.empty(3)
-    th2 = np.empty(3)
-    v4 = np.empty(4)
+    work = beam_scratch()
+    conn = beams.conn
     last = -1                       # node whose matrix is in Rg[1 - ia]
     ia = 0                          # Rg[ia] holds node a, Rg[1 - ia] node b
     for e in range(lo, hi):
         a = conn[e, 0]
         b = conn[e, 1]
-        k = sec_id[e]
-        m = mat_id[e]
         if a == last:               # node a was node b of the previous element
             ia = 1 - ia
         else:
-            _quat_to_matrix_at(quat, a, Rg, ia)
-        _quat_to_matrix_at(quat, b, Rg, 1 - ia)
+            _quat_to_matrix_at(quat, a, work.Rg, ia)
+        _quat_to_matrix_at(quat, b, work.Rg, 1 - ia)
         last = b
-        element_force(e, a, b, X0, x, R0, Rg, ia, 1 - ia, xi_g, w_g, sec_y[k], sec_z[k],
-                      sec_area[k], sec_GJ[k], mats[m, 0], mats[m, 1], mats[m, 2], mats[m, 3],
-                      eps_p, alpha, sa_h, f_el, W, Rbar, th1, th2, v4)
+        element_force(e, beams, x, ia, 1 - ia, work)
 
 
 @njit(cache=True)
@@ -355,20 +388,19 @@ def beam_scatter(conn, f_el, f_int, sign):
 
 
 @njit(cache=True, parallel=True)
-def beam_forces_reference(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_area, sec_GJ,
-                          sec_id, mats, mat_id, eps_p_c, alpha_c, sa_c, eps_p_t, alpha_t, sa_t,
-                          f_el, f_int, n_chunks):
+def beam_forces_reference(beams, trial, x, quat, f_int, n_chunks):
     """Reference for :func:`beam_forces` through ``element_response(want_tangent=False)`` of
-    :mod:`harnesspipe.fe.elements.beam` (kept for tests and benchmarks; same arguments).
+    :mod:`harnesspipe.fe.elements.beam` (kept for tests and benchmarks).
 
-    ``X0``/``x`` (n_nodes, 3) reference and current positions, ``quat`` (n_nodes, 4) nodal
-    rotations, ``conn`` (n_el, 2) global node ids, ``R0`` (n_el, 3, 3) initial frames;
-    ``sec_y, sec_z, sec_area`` (n_sec, n_fib) fibre data, ``sec_GJ`` (n_sec,);
-    ``mats`` (n_mat, 4) rows (E, sigma_y, K, n); history (n_el, n_gauss, n_fib): committed
-    ``eps_p_c, alpha_c`` are read, trial ``eps_p_t, alpha_t`` written and ``sa_t =
-    alpha_t**n`` formed from them (``sa_c`` is not needed); ``f_el`` (n_el, 12) scratch;
-    ``n_chunks`` the number of parallel chunks (``numba.get_num_threads()``).
+    ``beams`` (:class:`Beams`) with the committed history ``eps_p, alpha`` (read; its
+    ``sa_h`` is not needed); ``trial``: the same beams with the trial history arrays, into
+    which ``eps_p, alpha`` are written and ``sa_h = alpha**n`` formed from them;
+    ``beams.f_el`` scratch; forces added into ``f_int`` (n_nodes, 6); ``n_chunks`` the
+    number of parallel chunks (``numba.get_num_threads()``).
     """
+    conn, mats = beams.conn, beams.mats
+    # hoisted: Numba (0.68) loses a store through a tuple's field made inside the prange
+    eps_p_t, alpha_t, sa_t = trial.eps_p, trial.alpha, trial.sa_h
     n_el = conn.shape[0]
     n_chunks = max(1, min(n_chunks, n_el))
     for c in prange(n_chunks):
@@ -377,38 +409,39 @@ def beam_forces_reference(X0, conn, R0, x, quat, xi_g, w_g, sec_y, sec_z, sec_ar
         for e in range(c, n_el, n_chunks):
             a = conn[e, 0]
             b = conn[e, 1]
-            k = sec_id[e]
-            m = mat_id[e]
-            element_response(X0[a], X0[b], R0[e], x[a], x[b], quat[a], quat[b], xi_g, w_g,
-                             FibreSection(sec_y[k], sec_z[k], sec_area[k], sec_GJ[k]),
+            k = beams.sec_id[e]
+            m = beams.mat_id[e]
+            element_response(beams.X0[a], beams.X0[b], beams.R0[e], x[a], x[b], quat[a], quat[b],
+                             beams.xi_g, beams.w_g,
+                             FibreSection(beams.sec_y[k], beams.sec_z[k], beams.sec_area[k],
+                                          beams.sec_GJ[k]),
                              FibreMaterial(mats[m, 0], mats[m, 1], mats[m, 2], mats[m, 3]), False,
-                             FibreHistory(eps_p_c[e], alpha_c[e], eps_p_t[e], alpha_t[e]), False,
-                             f_el[e], Ke, work)
+                             FibreHistory(beams.eps_p[e], beams.alpha[e], eps_p_t[e], alpha_t[e]),
+                             False,
+                             beams.f_el[e], Ke, work)
             for g in range(alpha_t.shape[1]):
                 for f in range(alpha_t.shape[2]):
                     al = alpha_t[e, g, f]
                     sa_t[e, g, f] = positive_pow(al, mats[m, 3]) if al > 0.0 else 0.0
-    for e in range(n_el):
-        a = conn[e, 0]
-        b = conn[e, 1]
-        for i in range(6):
-            f_int[a, i] += f_el[e, i]
-            f_int[b, i] += f_el[e, 6 + i]
+    beam_scatter(conn, beams.f_el, f_int, 1.0)
 
 
 @njit(cache=True)
-def beam_plastic_work(conn, X0, w_g, sec_area, sec_id, mats, mat_id, alpha):
-    """Plastic dissipation of all fibres, ``sum V_f (sigma_y a + K a^(n+1) / (n+1))``.
+def beam_plastic_work(beams):
+    """Plastic dissipation of all fibres of ``beams`` (:class:`Beams`),
+    ``sum V_f (sigma_y a + K a^(n+1) / (n+1))``.
 
     For J2 with isotropic hardening the plastic work is the integral of the flow
     stress (eq. 2) over the accumulated plastic strain ``a`` -- exact, path-free.
     """
+    conn, X0, w_g, sec_area = beams.conn, beams.X0, beams.w_g, beams.sec_area
+    mats, mat_id, alpha = beams.mats, beams.mat_id, beams.alpha
     total = 0.0
     for e in range(conn.shape[0]):
         a0, b0 = conn[e, 0], conn[e, 1]
         l0 = np.sqrt((X0[b0, 0] - X0[a0, 0]) ** 2 + (X0[b0, 1] - X0[a0, 1]) ** 2
                      + (X0[b0, 2] - X0[a0, 2]) ** 2)
-        k = sec_id[e]
+        k = beams.sec_id[e]
         sy = mats[mat_id[e], 1]
         K = mats[mat_id[e], 2]
         n = mats[mat_id[e], 3]
