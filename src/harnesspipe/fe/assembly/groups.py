@@ -4,7 +4,10 @@ Each group is a ``NamedTuple`` of arrays and scalars that Numba passes as one ty
 tuple, so that a kernel reads ``beams.conn`` instead of the 40th positional argument:
 two arrays of the same type can no longer be swapped by a reordering.  The groups'
 arrays are the system's own (updated in place: histories, forces); the system makes the
-groups once and again when an array is replaced (after a contact search).
+groups once and again when an array is replaced (after a contact search).  Inside a
+``prange`` a kernel writes a group's arrays only from a called kernel or through locals
+taken before the loop: a store through a tuple's field in the loop body itself is lost
+(Numba issue 7135, still open in 0.68).
 
 The beams' group, :class:`harnesspipe.fe.elements.beam_explicit.Beams`, lives with the
 beam kernels that take it and is imported from there.

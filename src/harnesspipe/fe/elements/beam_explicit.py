@@ -399,7 +399,7 @@ def beam_forces_reference(beams, trial, x, quat, f_int, n_chunks):
     number of parallel chunks (``numba.get_num_threads()``).
     """
     conn, mats = beams.conn, beams.mats
-    # hoisted: Numba (0.68) loses a store through a tuple's field made inside the prange
+    # locals: a store through a tuple's field inside a prange is lost (Numba issue 7135)
     eps_p_t, alpha_t, sa_t = trial.eps_p, trial.alpha, trial.sa_h
     n_el = conn.shape[0]
     n_chunks = max(1, min(n_chunks, n_el))
