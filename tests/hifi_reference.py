@@ -15,7 +15,7 @@ from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_beam, cohesive_ti
 from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact
 from harnesspipe.fe.contact.node_facet import node_facet_contact
 from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact
-from harnesspipe.fe.contact.wire_wire import beam_beam_contact
+from harnesspipe.fe.contact.wire_wire import WireContact, beam_beam_contact
 from harnesspipe.fe.elements.shell_bt import HOURGLASS_COEF, shell_forces
 
 FAMILY_KERNELS = ("beams", "shells", "wire-wire contact", "node-facet contact",
@@ -56,9 +56,9 @@ def separate_forces(s, v, dt, seconds: dict | None = None):
     shell_forces(s.x, v, s.sconn, s.sthick, s.smat, s.sstate, dt, s.s_el, F[0],
                  HOURGLASS_COEF, -1.0)
     clock.lap("shells")
-    n = beam_beam_contact(s.x, v, s.seg, s.seg_r, s.seg_body, s.ww_pairs, s.k_ww, s.k_ww,
-                             itf["mu_s"], itf["mu_k"], itf["d_c"], dt, s.time_scale,
-                             s.ww_hist[0], s.ww_hist[1], F[1], F[2])
+    wc = WireContact(s.seg, s.seg_r, s.seg_body, s.ww_pairs, s.k_ww, s.k_ww, itf["mu_s"],
+                     itf["mu_k"], itf["d_c"], s.ww_hist[0], s.ww_hist[1])
+    n = beam_beam_contact(s.x, v, wc, dt, s.time_scale, F[1], F[2])
     clock.lap("wire-wire contact")
     for fs in s.facet_sets:
         n += node_facet_contact(s.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"],

@@ -15,7 +15,7 @@ from harnesspipe.fe.contact.search import (box_pairs, max_drift2, near_segment_p
                                            quad_aabbs, segment_aabbs, segment_distance)
 from harnesspipe.fe.contact.tie_targets import make_ties
 from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact
-from harnesspipe.fe.contact.wire_wire import WW_POINTS, beam_beam_contact
+from harnesspipe.fe.contact.wire_wire import WW_POINTS, WireContact, beam_beam_contact
 from harnesspipe.fe.materials.cohesive import cohesive_dissipated_energy
 
 R_W = 0.65
@@ -112,8 +112,8 @@ def test_aabb_helpers():
 def _bb(x, v, seg, pairs, body, hp, hf, k_n=100.0, k_t=0.0, dt=1e-5, ts=1.0, mu=(0.4, 0.1, 2.0)):
     fn = _z(len(x))
     ft = _z(len(x))
-    n = beam_beam_contact(x, v, seg, np.full(len(seg), R_W), body, pairs, k_n, k_t, mu[0], mu[1],
-                          mu[2], dt, ts, hp, hf, fn, ft)
+    wc = WireContact(seg, np.full(len(seg), R_W), body, pairs, k_n, k_t, *mu, hp, hf)
+    n = beam_beam_contact(x, v, wc, dt, ts, fn, ft)
     return n, fn, ft
 
 
@@ -1011,8 +1011,9 @@ def test_far_candidates_change_nothing():
             else:
                 pw, pf = all_ww, all_nf
             fn, ft = _z(len(x)), _z(len(x))
-            n1 = beam_beam_contact(x, v, seg, np.full(len(seg), R_W), body, pw, 100.0, 50.0,
-                                   0.4, 0.1, 2.0, 1e-3, 1.0, hw[0], hw[1], fn, ft)
+            n1 = beam_beam_contact(x, v, WireContact(seg, np.full(len(seg), R_W), body, pw, 100.0,
+                                                     50.0, 0.4, 0.1, 2.0, hw[0], hw[1]),
+                                   1e-3, 1.0, fn, ft)
             n2 = node_facet_contact(x, v, nodes, r, quads, t, sign, pf, 100.0, 50.0, 0.4, 0.1,
                                     2.0, 1e-3, 1.0, 1.0, hf[0], hf[1], fn, ft)
             out.append((n1, n2, fn.copy(), ft.copy()))

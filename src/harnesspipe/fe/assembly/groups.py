@@ -9,8 +9,9 @@ groups once and again when an array is replaced (after a contact search).  Insid
 taken before the loop: a store through a tuple's field in the loop body itself is lost
 (Numba issue 7135, still open in 0.68).
 
-The beams' group, :class:`harnesspipe.fe.elements.beam_explicit.Beams`, lives with the
-beam kernels that take it and is imported from there.
+The beams' group (:class:`harnesspipe.fe.elements.beam_explicit.Beams`) and the
+wire-wire contact's (:class:`harnesspipe.fe.contact.wire_wire.WireContact`) live with the
+kernels that take them and are imported from there.
 
 Stacked groups (node-facet sets, tie groups, pin-facet groups) hold their members'
 arrays one after the other (:func:`harnesspipe.fe.assembly.lanes.stack_groups`),
@@ -22,7 +23,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from harnesspipe.fe.elements.beam_explicit import Beams   # noqa: F401  (the beams' group)
+from harnesspipe.fe.contact.wire_wire import WireContact   # noqa: F401  (re-exported)
+from harnesspipe.fe.elements.beam_explicit import Beams   # noqa: F401  (re-exported)
 
 
 class Shells(NamedTuple):
@@ -33,21 +35,6 @@ class Shells(NamedTuple):
     state: np.ndarray       # (n_sh, N_STATE) strains, stresses, plastic state, in place
     f_el: np.ndarray        # (n_sh, 4, 6) element forces (scratch)
     hg: float               # hourglass coefficient
-
-
-class WireContact(NamedTuple):
-    """Wire-wire contact (:func:`harnesspipe.fe.contact.wire_wire.beam_beam_contact`)."""
-    seg: np.ndarray         # (n_seg, 2) node ids of the wires' segments
-    seg_r: np.ndarray       # (n_seg,) radii
-    seg_body: np.ndarray    # (n_seg,) wire of each segment
-    pairs: np.ndarray       # (n_pairs, 2) candidate segment pairs
-    k_n: float              # normal penalty
-    k_t: float              # stick penalty
-    mu_s: float             # eq. 6
-    mu_k: float
-    d_c: float
-    hist_partner: np.ndarray   # (n_seg, maxs) slot history, in place
-    hist_ft: np.ndarray        # (n_seg, maxs, WW_POINTS, 3)
 
 
 class FacetSets(NamedTuple):

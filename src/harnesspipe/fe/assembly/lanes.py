@@ -7,7 +7,7 @@ On the 2 cores this project targets, one ``prange`` over two lanes does better: 
 serial kernels run side by side,
 
 * lane 0: the wire-wire contact
-  (:func:`harnesspipe.fe.contact.wire_wire.beam_beam_contact_serial`), the node-facet
+  (:func:`harnesspipe.fe.contact.wire_wire.beam_beam_contact`), the node-facet
   contact sets (:func:`~harnesspipe.fe.contact.node_facet.node_facet_contact_serial`) and
   the beams ``0 .. split - 1`` (:func:`harnesspipe.fe.elements.beam_explicit.beam_range_forces`);
 * lane 1: the shells (:func:`harnesspipe.fe.elements.shell_bt.shell_element_forces_serial`), the
@@ -36,7 +36,7 @@ from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_beam, cohesive_ti
 from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact
 from harnesspipe.fe.contact.node_facet import node_facet_contact_serial
 from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact_serial
-from harnesspipe.fe.contact.wire_wire import beam_beam_contact_serial
+from harnesspipe.fe.contact.wire_wire import beam_beam_contact
 from harnesspipe.fe.elements.beam_explicit import beam_range_forces, beam_scatter
 from harnesspipe.fe.elements.shell_bt import scatter_add, shell_element_forces_serial
 
@@ -92,9 +92,7 @@ def _beam_range(lo, hi, x, quat, b):
 @njit(cache=True)
 def _lane_contact(x, v, dt, time_scale, w, fs, forces):
     """Lane 0's contacts: wire-wire, then the node-facet sets; returns the active count."""
-    n = beam_beam_contact_serial(x, v, w.seg, w.seg_r, w.seg_body, w.pairs, w.k_n, w.k_t,
-                                 w.mu_s, w.mu_k, w.d_c, dt, time_scale, w.hist_partner,
-                                 w.hist_ft, forces.f_n, forces.f_t)
+    n = beam_beam_contact(x, v, w, dt, time_scale, forces.f_n, forces.f_t)
     return n + _facet_sets(x, v, dt, time_scale, fs, forces)
 
 

@@ -16,7 +16,8 @@ from the quad's box before projecting (:mod:`.node_facet`) and updates its histo
 in place.  Each parallel kernel has a serial twin built from the same pieces
 (``*_serial``): the hi-fi bundle runs those side by side in two lanes
 (:mod:`harnesspipe.fe.assembly.lanes`), and the parallel kernels -- for a caller that runs
-one kernel at a time -- are the lanes' reference in the tests.
+one kernel at a time -- are the lanes' reference in the tests.  The wire-wire contact has
+its serial kernel only (it runs in a lane and in the tests' reference alike).
 
 History.  Each call is one committed explicit step: friction and cohesive history
 arrays are updated IN PLACE.  Do not call a kernel twice for the same step.

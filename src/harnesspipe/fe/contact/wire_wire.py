@@ -11,11 +11,12 @@ blended in between.  Conventions: :mod:`harnesspipe.fe.contact.common`.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from harnesspipe.fe.contact.common import (CHUNK, REJECT_TOL, SERIAL_MAX_CHUNKS, find_slot,
+from harnesspipe.fe.contact.common import (REJECT_TOL, find_slot,
                                            free_slot, to_tangent_plane)
 from harnesspipe.fe.contact.search import segment_closest_params
 from harnesspipe.fe.materials.friction import rate_dependent_friction
@@ -24,6 +25,43 @@ from harnesspipe.fe.vec3 import any_perpendicular
 PARALLEL_COS = (0.98, 0.995)   # |cos| of two segments: crossing rule below, parallel rule above,
                                # both blended in between (see _segment_points)
 WW_POINTS = 3           # contact points per pair: crossing point, two parallel ends
+
+
+class WireContact(NamedTuple):
+    """Wire-wire contact, the argument group of :func:`beam_beam_contact`."""
+    seg: np.ndarray         # (n_seg, 2) node ids of the wires' segments
+    seg_r: np.ndarray       # (n_seg,) radii (mm)
+    seg_body: np.ndarray    # (n_seg,) wire of each segment (one wire's never touch)
+    pairs: np.ndarray       # (n_pairs, 2) candidate segment pairs
+    k_n: float              # normal penalty (N/mm per unit weight of a contact point)
+    k_t: float              # tangential (stick) penalty (N/mm), 0 disables friction
+    mu_s: float             # eq. 6
+    mu_k: float
+    d_c: float              # (s of physical time)
+    hist_partner: np.ndarray   # (n_seg, maxs) int64 slot history, in place
+    hist_ft: np.ndarray        # (n_seg, maxs, WW_POINTS, 3) friction history, in place
+
+
+class Touching(NamedTuple):
+    """The touching pairs of one call: flags and points of every candidate (phase 1), the
+    forces and new history of the touching ones, compact by ``j`` (phase 2)."""
+    flag: np.ndarray        # (n_pairs,) int8, bit k: point k penetrates
+    pts: np.ndarray         # (n_pairs, 4, WW_POINTS) s, u, weight; beta, beta', rule (row 3)
+    idx: np.ndarray         # (n_act,) the touching pairs
+    pfn: np.ndarray         # (n_act, WW_POINTS, 3) weighted normal force on a's point
+    pft: np.ndarray         # (n_act, WW_POINTS, 3) weighted friction force on a's point
+    hnew: np.ndarray        # (n_act, WW_POINTS, 3) new friction history (per unit weight)
+    pdu: np.ndarray         # (n_act, 2) (U_par - U_cross) beta', beta U_par / w
+
+
+@njit(cache=True)
+def _touching_arrays(flag, pts):
+    """The :class:`Touching` of the flagged pairs, phase-2 arrays allocated (unset)."""
+    idx = _touching(flag)
+    n_act = idx.size
+    return Touching(flag, pts, idx, np.empty((n_act, WW_POINTS, 3)),
+                    np.empty((n_act, WW_POINTS, 3)), np.empty((n_act, WW_POINTS, 3)),
+                    np.empty((n_act, 2)))
 
 
 @njit(cache=True)
@@ -206,25 +244,18 @@ def _overlap_forces(x, a0, a1, b0, b1, coef, f_n, scr):
         f_n[b1, c] += coef * r * eb[c]
 
 
-@njit(cache=True, parallel=True)
-def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d_c, dt,
-                      time_scale, hist_partner, hist_ft, f_n, f_t):
+@njit(cache=True)
+def beam_beam_contact(x, v, wc, dt, time_scale, f_n, f_t):
     """Wire-wire penalty contact with eq. 6 friction between 2-node beam segments.
 
     Parameters
     ----------
     x, v : (n_nodes, 3+) positions, half-step velocities.
-    seg : (n_seg, 2) node ids of the segments; seg_r : (n_seg,) radii (mm);
-    seg_body : (n_seg,) wire id (segments of one wire never contact each other).
-    pairs : (n_pairs, 2) candidate segment pairs (e.g. ``box_pairs(.., same_set=True)``
-        on ``segment_aabbs``); the owner of a pair's history is ``min(a, b)``.
-    k_n : normal penalty (N/mm per unit weight of a contact point);
-    k_t : tangential (stick) penalty (N/mm), 0 disables friction.
-    mu_s, mu_k, d_c : eq. 6 (d_c in s of PHYSICAL time).
+    wc : :class:`WireContact`; its ``pairs`` the candidate segment pairs (e.g.
+        ``box_pairs(.., same_set=True)`` on ``segment_aabbs``), the owner of a pair's
+        history ``min(a, b)``; its history (``new_slot_history(n_seg, maxs,
+        points=WW_POINTS)``) per (owner, partner slot, contact point), in place.
     dt : solver step; time_scale : physical / simulated duration (dt_phys = dt time_scale).
-    hist_partner : (n_seg, MAXS) int64; hist_ft : (n_seg, MAXS, WW_POINTS, 3) friction
-        history per (owner, partner slot, contact point), in place (``new_slot_history(n_seg,
-        maxs, points=WW_POINTS)``).
     f_n, f_t : (n_nodes, 3+) outputs, normal and friction forces ADDED.
 
     Geometry: gap ``|p_a - p_b| - r_a - r_b`` at the contact points of
@@ -234,63 +265,21 @@ def beam_beam_contact(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d
     energy gradient).  Point forces go to the end nodes by the linear shape functions
     ``(1 - s, s)``.
 
-    Returns the number of pairs with at least one active contact point.
+    Serial: the bundle runs it beside the other force families
+    (:mod:`harnesspipe.fe.assembly.lanes`).  Returns the number of pairs with at least one
+    active contact point.
     """
-    n_pairs = pairs.shape[0]
-    valence = _valence(seg, x.shape[0])
+    n_pairs = wc.pairs.shape[0]
+    valence = _valence(wc.seg, x.shape[0])
     # phase 1: which pairs touch, and at which of their points (kept for phase 2)
     flag = np.empty(n_pairs, dtype=np.int8)
-    pts = np.empty((n_pairs, 4, WW_POINTS))   # s, u, weight per point; beta, beta' (row 3)
-    n_chunks = (n_pairs + CHUNK - 1) // CHUNK
-    if n_chunks <= SERIAL_MAX_CHUNKS:
-        _ww_flags(x, seg, seg_r, seg_body, pairs, valence, 0, n_pairs, flag, pts)
-    else:
-        for ch in prange(n_chunks):
-            _ww_flags(x, seg, seg_r, seg_body, pairs, valence, ch * CHUNK,
-                      min(n_pairs, (ch + 1) * CHUNK), flag, pts)
-    idx = _touching(flag)
-    n_act = idx.size
-    # phase 2: forces and friction of the touching pairs only
-    pfn = np.empty((n_act, WW_POINTS, 3))     # weighted normal force on a's point
-    pft = np.empty((n_act, WW_POINTS, 3))     # weighted friction force on a's point
-    hnew = np.empty((n_act, WW_POINTS, 3))    # new friction history (per unit weight)
-    pdu = np.empty((n_act, 2))                # (U_par - U_cross) beta', beta U_par / w
-    dt_phys = dt * time_scale
-    n_chunks = (n_act + CHUNK - 1) // CHUNK
-    if n_chunks <= SERIAL_MAX_CHUNKS:
-        _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c, dt,
-                   dt_phys, hist_partner, hist_ft, 0, n_act, pfn, pft, hnew, pdu)
-    else:
-        for ch in prange(n_chunks):
-            _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c,
-                       dt, dt_phys, hist_partner, hist_ft, ch * CHUNK,
-                       min(n_act, (ch + 1) * CHUNK), pfn, pft, hnew, pdu)
-    _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner, hist_ft,
-               f_n, f_t)
-    return n_act
-
-
-@njit(cache=True)
-def beam_beam_contact_serial(x, v, seg, seg_r, seg_body, pairs, k_n, k_t, mu_s, mu_k, d_c,
-                             dt, time_scale, hist_partner, hist_ft, f_n, f_t):
-    """Serial twin of :func:`beam_beam_contact` (for a caller that runs it beside other
-    work); the same phases, the same arithmetic, the same results."""
-    n_pairs = pairs.shape[0]
-    valence = _valence(seg, x.shape[0])
-    flag = np.empty(n_pairs, dtype=np.int8)
     pts = np.empty((n_pairs, 4, WW_POINTS))
-    _ww_flags(x, seg, seg_r, seg_body, pairs, valence, 0, n_pairs, flag, pts)
-    idx = _touching(flag)
-    n_act = idx.size
-    pfn = np.empty((n_act, WW_POINTS, 3))
-    pft = np.empty((n_act, WW_POINTS, 3))
-    hnew = np.empty((n_act, WW_POINTS, 3))
-    pdu = np.empty((n_act, 2))
-    _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c, dt,
-               dt * time_scale, hist_partner, hist_ft, 0, n_act, pfn, pft, hnew, pdu)
-    _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner, hist_ft,
-               f_n, f_t)
-    return n_act
+    _ww_flags(x, wc, valence, flag, pts)
+    # phase 2: forces and friction of the touching pairs only
+    t = _touching_arrays(flag, pts)
+    _ww_forces(x, v, wc, t, dt, dt * time_scale)
+    _ww_commit(x, wc, t, f_n, f_t)
+    return t.idx.size
 
 
 @njit(cache=True)
@@ -320,11 +309,12 @@ def _touching(flag):
 
 
 @njit(cache=True)
-def _ww_commit(x, seg, pairs, idx, flag, pts, pfn, pft, hnew, pdu, hist_partner, hist_ft,
-               f_n, f_t):
+def _ww_commit(x, wc, t, f_n, f_t):
     """The serial end of the wire-wire contact: the new friction history of the touching
-    pairs replaces the old one, and their point forces go to the segments' end nodes
-    (in pair order)."""
+    pairs ``t`` (:class:`Touching`) replaces the old one, and their point forces go to the
+    segments' end nodes (in pair order)."""
+    seg, pairs, hist_partner, hist_ft = wc.seg, wc.pairs, wc.hist_partner, wc.hist_ft
+    idx, flag, pts, pfn, pft, hnew, pdu = t.idx, t.flag, t.pts, t.pfn, t.pft, t.hnew, t.pdu
     for i in range(hist_partner.shape[0]):
         for s in range(hist_partner.shape[1]):
             hist_partner[i, s] = -1
@@ -407,11 +397,13 @@ def _segments_apart(x, a0, a1, b0, b1, r):
 
 
 @njit(cache=True)
-def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag, pts):
-    """flag[p] for pairs p0..p1-1: bit k set if contact point k of the pair penetrates;
-    for a pair with a flag, its points (:func:`_segment_points`) into ``pts[p]``: rows s,
-    u, weight, and (beta, beta', rule mask) in row 3."""
-    for p in range(p0, p1):
+def _ww_flags(x, wc, valence, flag, pts):
+    """flag[p] for every pair p of ``wc`` (:class:`WireContact`): bit k set if contact
+    point k of the pair penetrates; for a pair with a flag, its points
+    (:func:`_segment_points`) into ``pts[p]``: rows s, u, weight, and (beta, beta', rule
+    mask) in row 3."""
+    seg, seg_r, seg_body, pairs = wc.seg, wc.seg_r, wc.seg_body, wc.pairs
+    for p in range(pairs.shape[0]):
         flag[p] = 0
         a = pairs[p, 0]
         b = pairs[p, 1]
@@ -444,14 +436,17 @@ def _ww_flags(x, seg, seg_r, seg_body, pairs, valence, p0, p1, flag, pts):
 
 
 @njit(cache=True)
-def _ww_forces(x, v, seg, seg_r, pairs, idx, flag, pts, k_n, k_t, mu_s, mu_k, d_c, dt,
-               dt_phys, hist_partner, hist_ft, j0, j1, pfn, pft, hnew, pdu):
-    """Normal and friction forces of the touching pairs idx[j0:j1] (compact arrays by j) at
-    their points ``pts`` (:func:`_ww_flags`); ``pdu[j, 0]``: (U_par - U_cross) beta' for
-    :func:`_blend_forces`, ``pdu[j, 1]``: beta U_par / w, the parallel energy per unit
-    weight, for :func:`_overlap_forces`."""
+def _ww_forces(x, v, wc, t, dt, dt_phys):
+    """Normal and friction forces of the touching pairs ``t.idx`` (:class:`Touching`,
+    compact arrays by j) at their points ``t.pts`` (:func:`_ww_flags`); ``pdu[j, 0]``:
+    (U_par - U_cross) beta' for :func:`_blend_forces`, ``pdu[j, 1]``: beta U_par / w, the
+    parallel energy per unit weight, for :func:`_overlap_forces`."""
+    seg, seg_r, pairs = wc.seg, wc.seg_r, wc.pairs
+    hist_partner, hist_ft = wc.hist_partner, wc.hist_ft
+    k_n, k_t, mu_s, mu_k, d_c = wc.k_n, wc.k_t, wc.mu_s, wc.mu_k, wc.d_c
+    idx, flag, pts, pfn, pft, hnew, pdu = t.idx, t.flag, t.pts, t.pfn, t.pft, t.hnew, t.pdu
     scr = np.zeros((4, 3))
-    for j in range(j0, j1):
+    for j in range(idx.size):
         p = idx[j]
         for k in range(WW_POINTS):
             for c in range(3):
