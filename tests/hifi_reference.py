@@ -13,7 +13,7 @@ import numpy as np
 
 from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_beam, cohesive_ties_quad
 from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact
-from harnesspipe.fe.contact.node_facet import node_facet_contact
+from harnesspipe.fe.contact.node_facet import FacetSet, node_facet_contact
 from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact
 from harnesspipe.fe.contact.wire_wire import WireContact, beam_beam_contact
 from harnesspipe.fe.elements.shell_bt import HOURGLASS_COEF, shell_forces
@@ -61,10 +61,9 @@ def separate_forces(s, v, dt, seconds: dict | None = None):
     n = beam_beam_contact(s.x, v, wc, dt, s.time_scale, F[1], F[2])
     clock.lap("wire-wire contact")
     for fs in s.facet_sets:
-        n += node_facet_contact(s.x, v, fs["nodes"], fs["r"], fs["quads"], fs["t"],
-                                   fs["sign"], fs["pairs"], fs["k"], fs["k"], *fs["mu"], dt,
-                                   s.time_scale, fs["pen_max"], fs["hist"][0], fs["hist"][1],
-                                   F[1], F[2])
+        fset = FacetSet(fs["nodes"], fs["r"], fs["quads"], fs["t"], fs["sign"], fs["pairs"],
+                        fs["k"], fs["k"], *fs["mu"], fs["pen_max"], *fs["hist"])
+        n += node_facet_contact(s.x, v, fset, dt, s.time_scale, F[1], F[2])
     clock.lap("node-facet contact")
     _ties(s, itf, v, F[5])
     clock.lap("cohesive ties")

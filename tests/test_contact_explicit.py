@@ -10,7 +10,7 @@ from harnesspipe.fe.contact.common import fit_slot_history, new_slot_history
 from harnesspipe.fe.contact.facet_pins import (SOFTMIN_TAU, facets_cylinder_contact,
                                                facets_cylinder_gaps)
 from harnesspipe.fe.contact.node_facet import SOFTMIN_TAU as NF_TAU
-from harnesspipe.fe.contact.node_facet import near_node_facet_pairs, node_facet_contact
+from harnesspipe.fe.contact.node_facet import FacetSet, near_node_facet_pairs, node_facet_contact
 from harnesspipe.fe.contact.search import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
                                            quad_aabbs, segment_aabbs, segment_distance)
 from harnesspipe.fe.contact.tie_targets import make_ties
@@ -522,9 +522,9 @@ def _plate(n_el=2, size=4.0, z=0.0):
 def _facet(x, v, nodes, quads, t, sign, pairs, hp, hf, k_n=100.0, k_t=0.0, dt=1e-3, ts=1.0,
            mu=(0.4, 0.1, 2.0), pen_max=1.0, r=R_W):
     fn, ft = _z(len(x)), _z(len(x))
-    n = node_facet_contact(x, v, nodes, np.full(len(nodes), r), quads, np.full(len(quads), t),
-                           np.full(len(quads), sign), pairs, k_n, k_t, mu[0], mu[1], mu[2], dt, ts,
-                           pen_max, hp, hf, fn, ft)
+    fset = FacetSet(nodes, np.full(len(nodes), r), quads, np.full(len(quads), t),
+                    np.full(len(quads), sign), pairs, k_n, k_t, *mu, pen_max, hp, hf)
+    n = node_facet_contact(x, v, fset, dt, ts, fn, ft)
     return n, fn, ft
 
 
@@ -1014,8 +1014,8 @@ def test_far_candidates_change_nothing():
             n1 = beam_beam_contact(x, v, WireContact(seg, np.full(len(seg), R_W), body, pw, 100.0,
                                                      50.0, 0.4, 0.1, 2.0, hw[0], hw[1]),
                                    1e-3, 1.0, fn, ft)
-            n2 = node_facet_contact(x, v, nodes, r, quads, t, sign, pf, 100.0, 50.0, 0.4, 0.1,
-                                    2.0, 1e-3, 1.0, 1.0, hf[0], hf[1], fn, ft)
+            n2 = node_facet_contact(x, v, FacetSet(nodes, r, quads, t, sign, pf, 100.0, 50.0, 0.4,
+                                                   0.1, 2.0, 1.0, hf[0], hf[1]), 1e-3, 1.0, fn, ft)
             out.append((n1, n2, fn.copy(), ft.copy()))
         runs.append((out, hw, hf))
     assert 2 < searches < 12                  # the skin lists are reused between searches

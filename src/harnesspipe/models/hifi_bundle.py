@@ -22,7 +22,7 @@ from harnesspipe.fe.assembly.groups import CohesiveLaw, FacetSets, Forces, Shell
 from harnesspipe.fe.assembly.lanes import (BeamSplit, bundle_forces, check_disjoint, no_pins,
                                            stack_groups)
 from harnesspipe.fe.contact.common import DEFAULT_MAXS, fit_slot_history, new_slot_history
-from harnesspipe.fe.contact.node_facet import near_node_facet_pairs, node_facet_contact
+from harnesspipe.fe.contact.node_facet import FacetSet, near_node_facet_pairs, node_facet_contact
 from harnesspipe.fe.contact.search import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
                                            quad_aabbs, segment_aabbs)
 from harnesspipe.fe.contact.wire_wire import WW_POINTS
@@ -350,9 +350,9 @@ class BundleSystem(BundleTies):
             f_n = np.zeros((self.mesh.n_nodes, 6))
             hist = new_slot_history(fs["nodes"].size)
             hist[0][:, 0] = 0        # every node counts as in contact: find those behind a facet too
-            node_facet_contact(self.x, np.zeros_like(f_n), fs["nodes"], fs["r"], fs["quads"],
-                                  fs["t"], fs["sign"], fs["pairs"], 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
-                                  1.0, fs["pen_max"], hist[0], hist[1], f_n, np.zeros_like(f_n))
+            unit = FacetSet(fs["nodes"], fs["r"], fs["quads"], fs["t"], fs["sign"], fs["pairs"],
+                            1.0, 0.0, 0.0, 0.0, 0.0, fs["pen_max"], hist[0], hist[1])
+            node_facet_contact(self.x, np.zeros_like(f_n), unit, 1.0, 1.0, f_n, np.zeros_like(f_n))
             pen = np.linalg.norm(f_n[fs["nodes"], :3], axis=1)
             if pen.max() < 1e-9:
                 return

@@ -34,7 +34,7 @@ from numba import njit, prange
 from harnesspipe.fe.assembly.groups import Cylinders, PinFacets, WirePins
 from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_beam, cohesive_ties_quad_serial
 from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact
-from harnesspipe.fe.contact.node_facet import node_facet_contact_serial
+from harnesspipe.fe.contact.node_facet import FacetSet, node_facet_contact_serial
 from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact_serial
 from harnesspipe.fe.contact.wire_wire import beam_beam_contact
 from harnesspipe.fe.elements.beam_explicit import beam_range_forces, beam_scatter
@@ -113,11 +113,10 @@ def _facet_sets(x, v, dt, time_scale, fs, forces):
         n0, n1 = off[g, 0], off[g + 1, 0]
         q0, q1 = off[g, 1], off[g + 1, 1]
         p0, p1 = off[g, 2], off[g + 1, 2]
-        n += node_facet_contact_serial(x, v, fs.nodes[n0:n1], fs.r[n0:n1], fs.quads[q0:q1],
-                                       fs.t[q0:q1], fs.sign[q0:q1], fs.pairs[p0:p1], prm[g, 0],
-                                       prm[g, 0], prm[g, 2], prm[g, 3], prm[g, 4], dt,
-                                       time_scale, prm[g, 1], fs.hist_p[n0:n1],
-                                       fs.hist_ft[n0:n1], forces.f_n, forces.f_t)
+        fset = FacetSet(fs.nodes[n0:n1], fs.r[n0:n1], fs.quads[q0:q1], fs.t[q0:q1],
+                        fs.sign[q0:q1], fs.pairs[p0:p1], prm[g, 0], prm[g, 0], prm[g, 2],
+                        prm[g, 3], prm[g, 4], prm[g, 1], fs.hist_p[n0:n1], fs.hist_ft[n0:n1])
+        n += node_facet_contact_serial(x, v, fset, dt, time_scale, forces.f_n, forces.f_t)
     return n
 
 

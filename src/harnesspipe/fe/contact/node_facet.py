@@ -9,6 +9,7 @@ projection (:func:`_nf_project`).  Conventions: :mod:`harnesspipe.fe.contact.com
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -23,26 +24,40 @@ SOFTMIN_TAU = 0.002     # mm: width of the soft minimum of a node's facet distan
 SOFTMIN_REACH = 40.0    # facets farther than this x SOFTMIN_TAU beyond the closest: weight < 5e-18
 
 
+class FacetSet(NamedTuple):
+    """One node-facet contact set, the argument group of :func:`node_facet_contact`."""
+    nodes: np.ndarray       # (n_cn,) node ids (e.g. the wire nodes)
+    node_r: np.ndarray      # (n_cn,) their radii
+    quads: np.ndarray       # (n_q, 4) node ids
+    quad_t: np.ndarray      # (n_q,) thicknesses
+    quad_sign: np.ndarray   # (n_q,) +1 / -1: the nodes' side is quad_sign (X_xi x X_eta)
+    pairs: np.ndarray       # (n_pairs, 2) candidate (index into nodes, quad) pairs
+    k_n: float              # normal penalty (N/mm)
+    k_t: float              # stick penalty (N/mm)
+    mu_s: float             # eq. 6 (mu_s = mu_k for constant mu)
+    mu_k: float
+    d_c: float
+    pen_max: float          # largest penetration accepted (mm)
+    hist_partner: np.ndarray   # (n_cn, maxs) int64 slot history, in place
+    hist_ft: np.ndarray        # (n_cn, maxs, 3) friction history, in place
+
+
 @njit(cache=True, parallel=True)
-def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n, k_t, mu_s,
-                       mu_k, d_c, dt, time_scale, pen_max, hist_partner, hist_ft, f_n, f_t):
+def node_facet_contact(x, v, fset, dt, time_scale, f_n, f_t):
     """One-sided penalty contact of nodes (spheres) with bilinear shell quads, eq. 6 friction.
 
     Parameters
     ----------
     x, v : (n_nodes, 3+) positions, half-step velocities.
-    nodes : (n_cn,) node ids (e.g. the wire nodes); node_r : (n_cn,) their radii.
-    quads : (n_q, 4) node ids; quad_t : (n_q,) thicknesses; quad_sign : (n_q,) +1 / -1:
-        the side where the nodes belong is ``quad_sign * (X_xi x X_eta)`` (e.g. -1 for
-        wires inside a tube whose quad normals point outwards).
-    pairs : (n_pairs, 2) candidate (index into ``nodes``, quad) pairs, e.g. ``box_pairs``
-        of ``node_aabbs`` vs ``quad_aabbs`` with same_set False.
-    k_n, k_t : penalties (N/mm); mu_s, mu_k, d_c : eq. 6 (mu_s = mu_k for constant mu);
+    fset : :class:`FacetSet`: the nodes (e.g. the wire nodes) and their radii; the quads,
+        their thicknesses and signs (the side where the nodes belong is
+        ``quad_sign * (X_xi x X_eta)``, e.g. -1 for wires inside a tube whose quad normals
+        point outwards); the candidate (index into ``nodes``, quad) pairs, e.g.
+        ``box_pairs`` of ``node_aabbs`` vs ``quad_aabbs`` with same_set False; penalties
+        (N/mm) and eq. 6; ``pen_max``, the largest penetration accepted (mm), beyond which
+        the node is taken to be on the other side (never grabbed from the wrong side), e.g.
+        ``r + t/2``; the history (``new_slot_history(n_cn, maxs)``), in place.
     dt, time_scale : solver step, physical / simulated duration.
-    pen_max : largest penetration accepted (mm); beyond it the node is taken to be on
-        the other side (never grabbed from the wrong side), e.g. ``r + t/2``.
-    hist_partner : (n_cn, MAXS) int64; hist_ft : (n_cn, MAXS, 3), in place
-        (``new_slot_history(n_cn, maxs)``).
     f_n, f_t : outputs, ADDED.  The node receives F, the quad nodes -F N_i(xi, eta).
 
     Gap: the distance of the node centre to the CLOSEST POINT of each facet's mid-surface
@@ -83,45 +98,46 @@ def node_facet_contact(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n
     diameter) only sees the nearer one.
     Returns the number of active contacts.
     """
-    n_pairs = pairs.shape[0]
-    dt_phys = dt * time_scale
-    t_max = 0.0
-    for q in range(quad_t.shape[0]):
-        t_max = max(t_max, quad_t[q])
+    n_pairs = fset.pairs.shape[0]
+    t_max = _t_max(fset.quad_t)
     pd = np.empty((n_pairs, 9))     # xi, eta, dist(signed), n(3) force direction, X(3)
     n_chunks = (n_pairs + CHUNK - 1) // CHUNK
     if n_chunks <= SERIAL_MAX_CHUNKS:
-        _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, 0, n_pairs, pd)
+        _nf_project(x, fset, t_max, 0, n_pairs, pd)
     else:
         for ch in prange(n_chunks):
-            _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, ch * CHUNK,
-                        min(n_pairs, (ch + 1) * CHUNK), pd)
-    return _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu_k, d_c,
-                      dt, dt_phys, pen_max, hist_partner, hist_ft, f_n, f_t)
+            _nf_project(x, fset, t_max, ch * CHUNK, min(n_pairs, (ch + 1) * CHUNK), pd)
+    return _nf_commit(x, v, fset, pd, dt, dt * time_scale, f_n, f_t)
 
 
 @njit(cache=True)
-def node_facet_contact_serial(x, v, nodes, node_r, quads, quad_t, quad_sign, pairs, k_n, k_t,
-                              mu_s, mu_k, d_c, dt, time_scale, pen_max, hist_partner, hist_ft,
-                              f_n, f_t):
+def node_facet_contact_serial(x, v, fset, dt, time_scale, f_n, f_t):
     """Serial twin of :func:`node_facet_contact` (for a caller that runs it beside other
     work); the same steps, the same arithmetic, the same results."""
-    n_pairs = pairs.shape[0]
+    n_pairs = fset.pairs.shape[0]
+    pd = np.empty((n_pairs, 9))
+    _nf_project(x, fset, _t_max(fset.quad_t), 0, n_pairs, pd)
+    return _nf_commit(x, v, fset, pd, dt, dt * time_scale, f_n, f_t)
+
+
+@njit(cache=True)
+def _t_max(quad_t):
+    """The thickest quad's thickness (0 for none)."""
     t_max = 0.0
     for q in range(quad_t.shape[0]):
         t_max = max(t_max, quad_t[q])
-    pd = np.empty((n_pairs, 9))
-    _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, 0, n_pairs, pd)
-    return _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu_k, d_c,
-                      dt, dt * time_scale, pen_max, hist_partner, hist_ft, f_n, f_t)
+    return t_max
 
 
 @njit(cache=True)
-def _nf_commit(x, v, nodes, node_r, quads, quad_t, pairs, pd, k_n, k_t, mu_s, mu_k, d_c, dt,
-               dt_phys, pen_max, hist_partner, hist_ft, f_n, f_t):
+def _nf_commit(x, v, fset, pd, dt, dt_phys, f_n, f_t):
     """The serial end of the node-facet contact, from the projections ``pd`` of the pairs
-    (:func:`_nf_project`): each node's soft-minimum gap, its forces (the gradient of the
-    penalty energy), friction on its dominant facet and its history."""
+    of ``fset`` (:func:`_nf_project`): each node's soft-minimum gap, its forces (the
+    gradient of the penalty energy), friction on its dominant facet and its history."""
+    nodes, node_r, quads, quad_t = fset.nodes, fset.node_r, fset.quads, fset.quad_t
+    pairs = fset.pairs
+    k_n, k_t, mu_s, mu_k, d_c = fset.k_n, fset.k_t, fset.mu_s, fset.mu_k, fset.d_c
+    pen_max, hist_partner, hist_ft = fset.pen_max, fset.hist_partner, fset.hist_ft
     n_cn = nodes.shape[0]
     was_in = np.empty(n_cn, dtype=np.bool_)
     for i in range(n_cn):
@@ -292,8 +308,9 @@ def near_node_facet_pairs(x, nodes, node_r, quads, quad_t, pairs, pen_max, margi
 
 
 @njit(cache=True)
-def _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, p0, p1, pd):
-    """Closest points of the (node, quad) pairs p0..p1-1 into pd (see node_facet_contact).
+def _nf_project(x, fset, t_max, p0, p1, pd):
+    """Closest points of the (node, quad) pairs p0..p1-1 of ``fset`` into pd (see
+    node_facet_contact).
 
     Early reject: a pair whose node is farther from the bounding box of the quad's nodes
     (which holds the bilinear facet, so the box distance bounds |dist| from below) than
@@ -304,6 +321,8 @@ def _nf_project(x, nodes, node_r, quads, quad_sign, pairs, t_max, pen_max, p0, p
     contact its closest facet and every facet of non-negligible weight are kept, and if it
     is rejected no pair of the node can be in contact: the result is unchanged.
     """
+    nodes, node_r, quads, quad_sign = fset.nodes, fset.node_r, fset.quads, fset.quad_sign
+    pairs, pen_max = fset.pairs, fset.pen_max
     prj = np.zeros(8)
     for p in range(p0, p1):
         i = pairs[p, 0]
