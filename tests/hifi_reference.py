@@ -11,7 +11,8 @@ import time
 
 import numpy as np
 
-from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_beam, cohesive_ties_quad
+from harnesspipe.fe.contact.cohesive_ties import (BeamTieSet, QuadTieSet, TieLaw, cohesive_ties_beam,
+                                                   cohesive_ties_quad, tie_set)
 from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact
 from harnesspipe.fe.contact.node_facet import FacetSet, node_facet_contact
 from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact
@@ -84,17 +85,12 @@ class _Clock:
 
 
 def _ties(s, itf, v, f):
+    law = TieLaw(s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"])
     for t in s.ties:
         if t["kind"] == "quad":
-            cohesive_ties_quad(s.x, v, t["tie_node"], t["tie_quad"], t["tie_xi"],
-                                  t["tie_sign"], t["tie_off"], t["tie_area"], t["tie_c"],
-                                  t["quads"], s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"],
-                                  t["tie_kappa"], t["tie_D"], t["tie_energy"], f)
+            cohesive_ties_quad(s.x, v, tie_set(QuadTieSet, t), law, f)
         else:
-            cohesive_ties_beam(s.x, v, s.quat, t["tie_node"], t["tie_seg"], t["tie_s"],
-                                  t["tie_anchor"], t["tie_arm"], t["tie_axis"], t["tie_area"],
-                                  t["tie_c"], s.seg, s.K_coh, s.delta0, itf["delta_f"],
-                                  itf["alpha_d"], t["tie_kappa"], t["tie_D"], t["tie_energy"], f)
+            cohesive_ties_beam(s.x, v, s.quat, tie_set(BeamTieSet, t, seg=s.seg), law, f)
 
 
 def _pins(s, v, dt, F) -> int:

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from harnesspipe.fe.contact.cohesive_ties import cohesive_tie_dissipation, cohesive_ties_quad
+from harnesspipe.fe.contact.cohesive_ties import (QuadTieSet, TieLaw, cohesive_tie_dissipation,
+                                                   cohesive_ties_quad, tie_set)
 from harnesspipe.fe.contact.common import fit_slot_history, new_slot_history
 from harnesspipe.fe.contact.facet_pins import (SOFTMIN_TAU, facets_cylinder_contact,
                                                facets_cylinder_gaps)
@@ -816,9 +817,9 @@ def _quad_tie(off=0.185, area=2.0):
 
 def _run_quad_tie(x, quads, tq):
     fc = _z(len(x))
-    args = [tq[k] for k in ("tie_node", "tie_quad", "tie_xi", "tie_sign", "tie_off", "tie_area")]
-    nf = cohesive_ties_quad(x, np.zeros_like(x), *args, np.zeros(1), quads, K, D0, DF, ALPHA,
-                            tq["tie_kappa"], tq["tie_D"], tq["tie_energy"], fc)
+    nf = cohesive_ties_quad(x, np.zeros_like(x), tie_set(QuadTieSet, tq, tie_c=np.zeros(1),
+                                                         quads=quads),
+                            TieLaw(K, D0, DF, ALPHA), fc)
     return nf, fc
 
 
@@ -908,7 +909,7 @@ def test_damaged_ties_are_conservative_when_closing_differs_from_opening():
     (undamaged penalty) and shear (damaged) has a traction not parallel to its separation.
     Its forces must still derive from its energy: zero work around a closed path on which
     the target turns (quad frame, or the wire anchor's rotation) and the tied node moves."""
-    from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_beam
+    from harnesspipe.fe.contact.cohesive_ties import BeamTieSet, cohesive_ties_beam
     from harnesspipe.fe.rotation import quat_from_rotvec
     axis = np.array([1.0, 0.3, 0.2])
     x0, quads, tq = _quad_tie()
@@ -941,10 +942,11 @@ def test_damaged_ties_are_conservative_when_closing_differs_from_opening():
         f = np.zeros((3, 6))
         hist[0][:] = 0.07
         hist[1][:] = 0.5
-        cohesive_ties_beam(x, np.zeros_like(x), np.tile(q, (3, 1)), np.array([2]), np.array([0]),
-                           np.array([0.4]), np.array([0]), np.array([[0.0, 0.75, 0.0]]),
-                           np.array([[1.0, 0.0, 0.0]]), np.array([2.0]), np.zeros(1),
-                           np.array([[0, 1]]), K, D0, DF, ALPHA, *hist, f)
+        ties = BeamTieSet(np.array([2]), np.array([0]), np.array([0.4]), np.array([0]),
+                          np.array([[0.0, 0.75, 0.0]]), np.array([[1.0, 0.0, 0.0]]),
+                          np.array([2.0]), np.zeros(1), np.array([[0, 1]]), *hist)
+        cohesive_ties_beam(x, np.zeros_like(x), np.tile(q, (3, 1)), ties, TieLaw(K, D0, DF, ALPHA),
+                           f)
         return f, x, a, k
 
     W, scale = _loop_work(beam_forces)
@@ -1043,9 +1045,8 @@ def test_tie_dashpot_resists_the_relative_velocity_with_the_bond(D):
     tq["tie_D"][:] = D
     tq["tie_kappa"][:] = 0.0 if D == 0.0 else 0.2
     fc = _z(len(x))
-    args = [tq[k] for k in ("tie_node", "tie_quad", "tie_xi", "tie_sign", "tie_off", "tie_area")]
-    cohesive_ties_quad(x, v, *args, np.array([c]), quads, K, D0, DF, ALPHA, tq["tie_kappa"],
-                       tq["tie_D"], tq["tie_energy"], fc)
+    cohesive_ties_quad(x, v, tie_set(QuadTieSet, tq, tie_c=np.array([c]), quads=quads),
+                       TieLaw(K, D0, DF, ALPHA), fc)
     xi, eta = tq["tie_xi"][0]
     N = 0.25 * np.array([(1 - xi) * (1 - eta), (1 + xi) * (1 - eta), (1 + xi) * (1 + eta),
                          (1 - xi) * (1 + eta)])

@@ -373,7 +373,7 @@ def test_rejected_run_fails_with_diagnostics_and_writes_nothing(tmp_path):
 def test_beam_tie_carries_no_force_under_rigid_motion_and_its_moment_balances():
     """A tape node tied to a wire point with a lever arm: a rigid rotation of wire and node
     leaves the tie unloaded; a pulled tie exerts no net force or moment on the system."""
-    from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_beam
+    from harnesspipe.fe.contact.cohesive_ties import BeamTieSet, TieLaw, cohesive_ties_beam
     from harnesspipe.fe.rotation import quat_from_rotvec
     X = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [4.0, 0.75, 0.0]])
     seg = np.array([[0, 1]])
@@ -385,9 +385,9 @@ def test_beam_tie_carries_no_force_under_rigid_motion_and_its_moment_balances():
     def call(x, quat):
         f = np.zeros((3, 6))
         hist = [np.zeros(1), np.zeros(1), np.zeros(1)]
-        cohesive_ties_beam(x, np.zeros_like(x), quat, args["tie_node"], args["tie_seg"],
-                           args["tie_s"], args["tie_anchor"], args["tie_arm"], args["tie_axis"],
-                           args["tie_area"], np.zeros(1), seg, K, d0, 0.08, 2.0, *hist, f)
+        ties = BeamTieSet(**args, tie_c=np.zeros(1), seg=seg, tie_kappa=hist[0], tie_D=hist[1],
+                          tie_energy=hist[2])
+        cohesive_ties_beam(x, np.zeros_like(x), quat, ties, TieLaw(K, d0, 0.08, 2.0), f)
         return f
 
     theta = np.array([0.3, -0.5, 0.9])
@@ -455,7 +455,8 @@ def test_tie_rows_bound_the_quad_ties_stiffness():
 def _tie_rows_against_stiffness(s, itf, ties):
     """Per node of a sample of the group's ties: (block row sum of the tie's stiffness) / (its
     bound k B_a S), and the largest row sum / k at a facet node of weight N = 0."""
-    from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_quad_serial
+    from harnesspipe.fe.contact.cohesive_ties import (QuadTieSet, TieLaw, cohesive_ties_quad_serial,
+                                                       tie_set)
     targets, B, S = s._tie_rows(ties)
     N_all = s._tie_targets(ties)[1]
     k = np.max(s.K_coh) * ties["tie_area"]
@@ -468,11 +469,13 @@ def _tie_rows_against_stiffness(s, itf, ties):
 
         def force(x):
             f = np.zeros_like(x)
+            one_tie = {k: ties[k][one] for k in ("tie_node", "tie_quad", "tie_xi", "tie_sign",
+                                                 "tie_off", "tie_area")}
             cohesive_ties_quad_serial(
-                x, np.zeros_like(x), ties["tie_node"][one], ties["tie_quad"][one],
-                ties["tie_xi"][one], ties["tie_sign"][one], ties["tie_off"][one],
-                ties["tie_area"][one], np.zeros(1), ties["quads"], s.K_coh, s.delta0,
-                itf["delta_f"], itf["alpha_d"], np.zeros(1), np.zeros(1), np.zeros(1), f)
+                x, np.zeros_like(x),
+                tie_set(QuadTieSet, one_tie, tie_c=np.zeros(1), quads=ties["quads"],
+                        tie_kappa=np.zeros(1), tie_D=np.zeros(1), tie_energy=np.zeros(1)),
+                TieLaw(s.K_coh, s.delta0, itf["delta_f"], itf["alpha_d"]), f)
             return f[nodes, :3].ravel()
 
         K, h = np.zeros((15, 15)), 1e-7

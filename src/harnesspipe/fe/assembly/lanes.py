@@ -32,7 +32,8 @@ import numpy as np
 from numba import njit, prange
 
 from harnesspipe.fe.assembly.groups import Cylinders, PinFacets, WirePins
-from harnesspipe.fe.contact.cohesive_ties import cohesive_ties_beam, cohesive_ties_quad_serial
+from harnesspipe.fe.contact.cohesive_ties import (BeamTieSet, QuadTieSet, TieLaw,
+                                                   cohesive_ties_beam, cohesive_ties_quad_serial)
 from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact
 from harnesspipe.fe.contact.node_facet import FacetSet, node_facet_contact_serial
 from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact_serial
@@ -123,23 +124,24 @@ def _facet_sets(x, v, dt, time_scale, fs, forces):
 @njit(cache=True)
 def _ties(x, v, quat, seg, qt, bt, law, f_c):
     """The tie groups in the order of ``law.order``."""
+    tie_law = TieLaw(law.K, law.delta0, law.delta_f, law.alpha_d)
     for r in range(law.order.shape[0]):
         g = law.order[r, 1]
         if law.order[r, 0] == 0:
             a, b = qt.off[g, 0], qt.off[g + 1, 0]
             q0, q1 = qt.off[g, 1], qt.off[g + 1, 1]
-            cohesive_ties_quad_serial(x, v, qt.tie_node[a:b], qt.tie_quad[a:b], qt.tie_xi[a:b],
-                                      qt.tie_sign[a:b], qt.tie_off[a:b], qt.tie_area[a:b],
-                                      qt.tie_c[a:b], qt.quads[q0:q1], law.K, law.delta0,
-                                      law.delta_f, law.alpha_d, qt.tie_kappa[a:b],
-                                      qt.tie_D[a:b], qt.tie_energy[a:b], f_c)
+            ties = QuadTieSet(qt.tie_node[a:b], qt.tie_quad[a:b], qt.tie_xi[a:b],
+                              qt.tie_sign[a:b], qt.tie_off[a:b], qt.tie_area[a:b],
+                              qt.tie_c[a:b], qt.quads[q0:q1], qt.tie_kappa[a:b], qt.tie_D[a:b],
+                              qt.tie_energy[a:b])
+            cohesive_ties_quad_serial(x, v, ties, tie_law, f_c)
         else:
             a, b = bt.off[g], bt.off[g + 1]
-            cohesive_ties_beam(x, v, quat, bt.tie_node[a:b], bt.tie_seg[a:b], bt.tie_s[a:b],
-                               bt.tie_anchor[a:b], bt.tie_arm[a:b], bt.tie_axis[a:b],
-                               bt.tie_area[a:b], bt.tie_c[a:b], seg, law.K, law.delta0,
-                               law.delta_f, law.alpha_d, bt.tie_kappa[a:b], bt.tie_D[a:b],
-                               bt.tie_energy[a:b], f_c)
+            ties = BeamTieSet(bt.tie_node[a:b], bt.tie_seg[a:b], bt.tie_s[a:b],
+                              bt.tie_anchor[a:b], bt.tie_arm[a:b], bt.tie_axis[a:b],
+                              bt.tie_area[a:b], bt.tie_c[a:b], seg, bt.tie_kappa[a:b],
+                              bt.tie_D[a:b], bt.tie_energy[a:b])
+            cohesive_ties_beam(x, v, quat, ties, tie_law, f_c)
 
 
 @njit(cache=True)

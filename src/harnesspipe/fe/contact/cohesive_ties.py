@@ -8,6 +8,7 @@ history (kappa, D, dissipated energy) advances in place.  Conventions:
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -17,6 +18,53 @@ from harnesspipe.fe.contact.surface import quad_eval
 from harnesspipe.fe.materials.cohesive import cohesive_dissipated_energy, cohesive_traction
 from harnesspipe.fe.rotation import quat_to_matrix
 from harnesspipe.fe.vec3 import dot
+
+
+class TieLaw(NamedTuple):
+    """The cohesive law of eqs. 7-10."""
+    K: np.ndarray           # (3,) K_nn, K_ss, K_tt
+    delta0: np.ndarray      # (3,) onset separations
+    delta_f: float          # separation at failure
+    alpha_d: float          # mixed-mode exponent
+
+
+class QuadTieSet(NamedTuple):
+    """Ties of nodes to material points of shell quads (:func:`cohesive_ties_quad`;
+    :func:`harnesspipe.fe.contact.tie_targets.make_ties` gives the tie arrays)."""
+    tie_node: np.ndarray    # (n,) the bonded (tape) node
+    tie_quad: np.ndarray    # (n,) target quad
+    tie_xi: np.ndarray      # (n, 2) bilinear coordinates (xi, eta) in [-1, 1]^2 of the target
+    tie_sign: np.ndarray    # (n,) +1 / -1 orienting X_xi x X_eta towards the tied node
+    tie_off: np.ndarray     # (n, 3) initial separation in the local frame (n, s, t)
+    tie_area: np.ndarray    # (n,) tributary area (mm^2)
+    tie_c: np.ndarray       # (n,) dashpot coefficient of the intact tie (N s/mm)
+    quads: np.ndarray       # (n_q, 4) node ids
+    tie_kappa: np.ndarray   # (n,) damage history, in place (D never decreases)
+    tie_D: np.ndarray       # (n,)
+    tie_energy: np.ndarray  # (n,) dissipated energy (N mm), accumulated in place
+
+
+class BeamTieSet(NamedTuple):
+    """Ties of nodes to material points of beams with rotational dofs
+    (:func:`cohesive_ties_beam`)."""
+    tie_node: np.ndarray    # (n,) the bonded node
+    tie_seg: np.ndarray     # (n,) target segment
+    tie_s: np.ndarray       # (n,) target point along it
+    tie_anchor: np.ndarray  # (n,) node whose rotation carries the arm
+    tie_arm: np.ndarray     # (n, 3) initial arm from the axis to the node
+    tie_axis: np.ndarray    # (n, 3) initial segment direction
+    tie_area: np.ndarray    # (n,)
+    tie_c: np.ndarray       # (n,)
+    seg: np.ndarray         # (n_seg, 2) node ids of the beams' segments
+    tie_kappa: np.ndarray   # (n,) damage history, in place
+    tie_D: np.ndarray       # (n,)
+    tie_energy: np.ndarray  # (n,)
+
+
+def tie_set(kind, arrays: dict, **given):
+    """The :class:`QuadTieSet` or :class:`BeamTieSet` (``kind``) of the arrays in
+    ``arrays`` (keyed by field), the fields in ``given`` taken from there instead."""
+    return kind(**{name: given[name] if name in given else arrays[name] for name in kind._fields})
 
 
 @njit(cache=True)
@@ -35,16 +83,18 @@ def _tie_dashpot(c, v_node, v_target):
 
 
 @njit(cache=True)
-def _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
-                  tie_area, tloc):
-    """Eqs. 7-10 at one tie; updates kappa, D (never decreasing) and the dissipated energy.
+def _cohesive_tie(delta, law, ties, j, tloc):
+    """Eqs. 7-10 at tie ``j`` of ``ties`` (either set); updates its kappa, D (never
+    decreasing) and dissipated energy.
 
     A fully debonded tie (D = 1) carries nothing, not even the compressive penalty of
     eq. 7: its fixed target point is no longer where the surfaces touch once they have
     separated and slid, and a penalty acting there would push with no stored energy to
     draw on.  Contact after debonding is the contact algorithms' job."""
+    K, tie_D = law.K, ties.tie_D
     D_old = tie_D[j]
-    D, kappa = cohesive_traction(delta, K, delta0, delta_mf, alpha, tie_kappa[j], D_old, tloc)
+    D, kappa = cohesive_traction(delta, K, law.delta0, law.delta_f, law.alpha_d,
+                                 ties.tie_kappa[j], D_old, tloc)
     if D >= 1.0:
         tloc[0] = 0.0
         tloc[1] = 0.0
@@ -52,30 +102,24 @@ def _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_en
     if D > D_old:
         dn = max(delta[0], 0.0)
         y = 0.5 * (K[0] * dn * dn + K[1] * delta[1] * delta[1] + K[2] * delta[2] * delta[2])
-        tie_energy[j] += (D - D_old) * y * tie_area[j]
+        ties.tie_energy[j] += (D - D_old) * y * ties.tie_area[j]
     tie_D[j] = D
-    tie_kappa[j] = kappa
+    ties.tie_kappa[j] = kappa
 
 
 @njit(cache=True, parallel=True)
-def cohesive_ties_quad(x, v, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, tie_c,
-                       quads, K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, f_c):
+def cohesive_ties_quad(x, v, ties, law, f_c):
     """Cohesive ties (eqs. 7-10) of nodes to fixed material points of shell quads.
 
     Parameters
     ----------
     x, v : (n_nodes, 3+) positions, half-step velocities.
-    tie_node : (n_tie,) the bonded (tape) node; tie_quad : (n_tie,) target quad;
-    tie_xi : (n_tie, 2) bilinear coordinates (xi, eta) in [-1, 1]^2 of the target point;
-    tie_sign : (n_tie,) +1 / -1 orienting the normal X_xi x X_eta towards the tied node;
-    tie_off : (n_tie, 3) initial separation x_node - x_target in the local frame
-        (n, s, t) (so that delta = 0 at the start);
-    tie_area : (n_tie,) tributary area (mm^2).  (All from :func:`make_ties`.)
-    tie_c : (n_tie,) dashpot coefficient of the intact tie (N s/mm, :func:`_tie_dashpot`).
-    quads : (n_q, 4) node ids; K (3,), delta0 (3,), delta_mf, alpha : eqs. 7-10.
-    tie_kappa, tie_D : (n_tie,) history, in place (D never decreases);
-    tie_energy : (n_tie,) dissipated energy (N mm) accumulated in place,
-        sum of area * (D_new - D_old) * Y with Y = (K_n <dn>^2 + K_s ds^2 + K_t dt^2) / 2.
+    ties : :class:`QuadTieSet`; its ``tie_off`` the initial separation x_node - x_target
+        in the local frame (n, s, t) (so that delta = 0 at the start), its ``tie_c`` the
+        dashpot of the intact tie (:func:`_tie_dashpot`); its history in place, the
+        dissipated energy the sum of area * (D_new - D_old) * Y with
+        Y = (K_n <dn>^2 + K_s ds^2 + K_t dt^2) / 2.
+    law : :class:`TieLaw`, eqs. 7-10.
     f_c : (n_nodes, 3+) output, cohesive forces ADDED (own array, not f_n / f_t).
 
     Frame: n = sign * unit(X_xi x X_eta), s = unit(X_xi), t = n x s at the tie point (it
@@ -84,41 +128,36 @@ def cohesive_ties_quad(x, v, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_
     K_nn penalty whatever D), the quad nodes +t A N_i.
     Returns the number of fully debonded ties (D >= 1).
     """
-    n = tie_node.shape[0]
+    n = ties.tie_node.shape[0]
     pf = np.empty((n, 3))
     pv = np.empty((n, 3))
     lever = np.empty((n, 3))
     n_chunks = (n + CHUNK - 1) // CHUNK
     for ch in prange(n_chunks):
-        _quad_ties_range(ch * CHUNK, min(n, (ch + 1) * CHUNK), x, v, tie_node, tie_quad,
-                         tie_xi, tie_sign, tie_off, tie_area, tie_c, quads, K, delta0,
-                         delta_mf, alpha, tie_kappa, tie_D, tie_energy, pf, pv, lever)
-    return _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, pv, lever, f_c)
+        _quad_ties_range(ch * CHUNK, min(n, (ch + 1) * CHUNK), x, v, ties, law, pf, pv, lever)
+    return _quad_ties_commit(x, ties, pf, pv, lever, f_c)
 
 
 @njit(cache=True)
-def cohesive_ties_quad_serial(x, v, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area,
-                              tie_c, quads, K, delta0, delta_mf, alpha, tie_kappa, tie_D,
-                              tie_energy, f_c):
+def cohesive_ties_quad_serial(x, v, ties, law, f_c):
     """Serial twin of :func:`cohesive_ties_quad` (for a caller that runs it beside other
     work); the same arithmetic, the same results."""
-    n = tie_node.shape[0]
+    n = ties.tie_node.shape[0]
     pf = np.empty((n, 3))
     pv = np.empty((n, 3))
     lever = np.empty((n, 3))
-    _quad_ties_range(0, n, x, v, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area, tie_c,
-                     quads, K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, pf, pv,
-                     lever)
-    return _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, pv, lever, f_c)
+    _quad_ties_range(0, n, x, v, ties, law, pf, pv, lever)
+    return _quad_ties_commit(x, ties, pf, pv, lever, f_c)
 
 
 @njit(cache=True)
-def _quad_ties_range(lo, hi, x, v, tie_node, tie_quad, tie_xi, tie_sign, tie_off, tie_area,
-                     tie_c, quads, K, delta0, delta_mf, alpha, tie_kappa, tie_D, tie_energy, pf,
-                     pv, lever):
-    """Ties ``lo..hi-1``: separation, eqs. 7-10 (damage in place) and the traction's force
-    on the tied node into ``pf``, its lever about the target point into ``lever``, the
-    dashpot's force on the tied node into ``pv``."""
+def _quad_ties_range(lo, hi, x, v, ties, law, pf, pv, lever):
+    """Ties ``lo..hi-1`` of ``ties``: separation, eqs. 7-10 (damage in place) and the
+    traction's force on the tied node into ``pf``, its lever about the target point into
+    ``lever``, the dashpot's force on the tied node into ``pv``."""
+    tie_node, tie_quad, tie_xi, tie_sign = ties.tie_node, ties.tie_quad, ties.tie_xi, ties.tie_sign
+    tie_off, tie_area, tie_c, quads = ties.tie_off, ties.tie_area, ties.tie_c, ties.quads
+    tie_D = ties.tie_D
     scr = np.empty((5, 3))
     for j in range(lo, hi):
         q = tie_quad[j]
@@ -144,8 +183,7 @@ def _quad_ties_range(lo, hi, x, v, tie_node, tie_quad, tie_xi, tie_sign, tie_off
         delta[0] = d0 * n0 + d1 * n1 + d2 * n2 - tie_off[j, 0]
         delta[1] = d0 * e1[0] + d1 * e1[1] + d2 * e1[2] - tie_off[j, 1]
         delta[2] = d0 * t0 + d1 * t1 + d2 * t2 - tie_off[j, 2]
-        _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
-                      tie_area, tloc)
+        _cohesive_tie(delta, law, ties, j, tloc)
         A = tie_area[j]
         pf[j, 0] = -A * (tloc[0] * n0 + tloc[1] * e1[0] + tloc[2] * t0)
         pf[j, 1] = -A * (tloc[0] * n1 + tloc[1] * e1[1] + tloc[2] * t1)
@@ -162,10 +200,12 @@ def _quad_ties_range(lo, hi, x, v, tie_node, tie_quad, tie_xi, tie_sign, tie_off
 
 
 @njit(cache=True)
-def _quad_ties_commit(x, tie_node, tie_quad, tie_xi, quads, tie_D, pf, pv, lever, f_c):
+def _quad_ties_commit(x, ties, pf, pv, lever, f_c):
     """The serial end of the quad ties: forces of the traction (``pf``, with the frame's)
     and of the dashpot (``pv``) to the tied nodes and the targets' nodes (in tie order);
     returns the number of failed ties."""
+    tie_node, tie_quad, tie_xi, quads, tie_D = (ties.tie_node, ties.tie_quad, ties.tie_xi,
+                                                ties.quads, ties.tie_D)
     n = tie_node.shape[0]
     n_failed = 0
     for j in range(n):
@@ -252,10 +292,9 @@ def _frame_forces(x, quads, q, xi, eta, L, p_node, f_c):
 
 
 @njit(cache=True)
-def cohesive_ties_beam(x, v, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm, tie_axis,
-                       tie_area, tie_c, seg, K, delta0, delta_mf, alpha, tie_kappa, tie_D,
-                       tie_energy, f_c):
-    """Cohesive ties (eqs. 7-10) of nodes to material points of beams with rotational dofs.
+def cohesive_ties_beam(x, v, quat, ties, law, f_c):
+    """Cohesive ties (eqs. 7-10) of nodes to material points of beams with rotational dofs
+    (``ties``: :class:`BeamTieSet`; ``law``: :class:`TieLaw`; forces ADDED into ``f_c``).
 
     The target of tie j is ``P + R_a r0`` with ``P = (1 - s) x_0 + s x_1`` on segment
     ``tie_seg`` at ``tie_s``, ``r0 = tie_arm`` the initial lever arm (tied node minus P, in
@@ -272,6 +311,9 @@ def cohesive_ties_beam(x, v, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm
     relative to ``P``'s (it only dissipates; it turns no frame).
     Returns the number of fully debonded ties.
     """
+    tie_node, tie_seg, tie_s, tie_anchor = ties.tie_node, ties.tie_seg, ties.tie_s, ties.tie_anchor
+    tie_arm, tie_axis, tie_area, tie_c = ties.tie_arm, ties.tie_axis, ties.tie_area, ties.tie_c
+    seg, tie_D = ties.seg, ties.tie_D
     n = tie_node.shape[0]
     R = np.empty((3, 3))
     arm = np.empty(3)
@@ -303,8 +345,7 @@ def cohesive_ties_beam(x, v, quat, tie_node, tie_seg, tie_s, tie_anchor, tie_arm
         delta[0] = dot(p, nv)
         delta[1] = dot(p, ax)
         delta[2] = dot(p, tv)
-        _cohesive_tie(delta, K, delta0, delta_mf, alpha, j, tie_kappa, tie_D, tie_energy,
-                      tie_area, tloc)
+        _cohesive_tie(delta, law, ties, j, tloc)
         if tie_D[j] >= 1.0:
             failed += 1
         A = tie_area[j]
