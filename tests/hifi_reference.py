@@ -13,9 +13,10 @@ import numpy as np
 
 from harnesspipe.fe.contact.cohesive_ties import (BeamTieSet, QuadTieSet, TieLaw, cohesive_ties_beam,
                                                    cohesive_ties_quad, tie_set)
-from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact
+from harnesspipe.fe.contact.common import Cylinders
+from harnesspipe.fe.contact.facet_pins import PinFacetSet, facets_cylinder_contact
 from harnesspipe.fe.contact.node_facet import FacetSet, node_facet_contact
-from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact
+from harnesspipe.fe.contact.wire_pins import WireChains, chain_cylinder_contact
 from harnesspipe.fe.contact.wire_wire import WireContact, beam_beam_contact
 from harnesspipe.fe.elements.shell_bt import HOURGLASS_COEF, shell_forces
 
@@ -96,11 +97,11 @@ def _ties(s, itf, v, f):
 def _pins(s, v, dt, F) -> int:
     p, w = s.pins, s.wire_pins
     p.force[...] = 0.0
-    n = chain_cylinder_contact(s.x, v, s.seg, s.seg_r, w["start"], w["mu"], p.centres, p.axes,
-                                  p.radii, p.velocity, w["k"], w["k"], dt, w["hist"], F[3], F[4],
-                                  p.force)
+    cyl = Cylinders(p.centres, p.axes, p.radii, p.velocity)
+    chains = WireChains(s.seg, s.seg_r, w["start"], w["mu"], w["k"], w["k"], w["hist"])
+    n = chain_cylinder_contact(s.x, v, chains, cyl, dt, F[3], F[4], p.force)
     for g in s.pin_groups:
-        n += facets_cylinder_contact(s.x, v, g["quads"], g["t"], g["mu"], p.centres, p.axes,
-                                        p.radii, g["slack"], p.velocity, g["k"], g["k"], dt,
-                                        g["hist_q"], g["hist"], F[3], F[4], p.force)
+        fset = PinFacetSet(g["quads"], g["t"], g["mu"], g["slack"], g["k"], g["k"], g["hist_q"],
+                           g["hist"])
+        n += facets_cylinder_contact(s.x, v, fset, cyl, dt, F[3], F[4], p.force)
     return n

@@ -7,15 +7,15 @@ from scipy.optimize import minimize
 
 from harnesspipe.fe.contact.cohesive_ties import (QuadTieSet, TieLaw, cohesive_tie_dissipation,
                                                    cohesive_ties_quad, tie_set)
-from harnesspipe.fe.contact.common import fit_slot_history, new_slot_history
-from harnesspipe.fe.contact.facet_pins import (SOFTMIN_TAU, facets_cylinder_contact,
+from harnesspipe.fe.contact.common import Cylinders, fit_slot_history, new_slot_history
+from harnesspipe.fe.contact.facet_pins import (SOFTMIN_TAU, PinFacetSet, facets_cylinder_contact,
                                                facets_cylinder_gaps)
 from harnesspipe.fe.contact.node_facet import SOFTMIN_TAU as NF_TAU
 from harnesspipe.fe.contact.node_facet import FacetSet, near_node_facet_pairs, node_facet_contact
 from harnesspipe.fe.contact.search import (box_pairs, max_drift2, near_segment_pairs, node_aabbs,
                                            quad_aabbs, segment_aabbs, segment_distance)
 from harnesspipe.fe.contact.tie_targets import make_ties
-from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact
+from harnesspipe.fe.contact.wire_pins import WireChains, chain_cylinder_contact
 from harnesspipe.fe.contact.wire_wire import WW_POINTS, WireContact, beam_beam_contact
 from harnesspipe.fe.materials.cohesive import cohesive_dissipated_energy
 
@@ -327,9 +327,9 @@ def _pin_hist(maxs=4):
 def _pin_facets(x, v, quads, t, hist, c, k_n=100.0, k_t=0.0, mu=0.3, dt=1e-3, Rc=2.5,
                 slack=0.0):
     fn, ft, fc = _z(len(x)), _z(len(x)), np.zeros((1, 3))
-    n = facets_cylinder_contact(x, v, quads, np.full(len(quads), t), mu, np.array([c], float),
-                                np.array([[0.0, 0, 1]]), np.array([Rc]), np.array([slack]),
-                                np.zeros((1, 3)), k_n, k_t, dt, hist[0], hist[1], fn, ft, fc)
+    fset = PinFacetSet(quads, np.full(len(quads), t), mu, np.array([slack]), k_n, k_t, *hist)
+    cyl = Cylinders(np.array([c], float), np.array([[0.0, 0, 1]]), np.array([Rc]), np.zeros((1, 3)))
+    n = facets_cylinder_contact(x, v, fset, cyl, dt, fn, ft, fc)
     return n, fn, ft, fc
 
 
@@ -538,9 +538,9 @@ def _chain(xs, y):
 
 def _pin(x, v, seg, hist, k_n=500.0, k_t=0.0, mu=0.3, dt=1e-3, Rc=2.5):
     fn, ft, fc = _z(len(x)), _z(len(x)), np.zeros((1, 3))
-    n = chain_cylinder_contact(x, v, seg, np.full(len(seg), R_W), np.array([0, len(seg)]), mu,
-                               np.zeros((1, 3)), np.array([[0.0, 0, 1]]), np.array([Rc]),
-                               np.zeros((1, 3)), k_n, k_t, dt, hist, fn, ft, fc)
+    chains = WireChains(seg, np.full(len(seg), R_W), np.array([0, len(seg)]), mu, k_n, k_t, hist)
+    cyl = Cylinders(np.zeros((1, 3)), np.array([[0.0, 0, 1]]), np.array([Rc]), np.zeros((1, 3)))
+    n = chain_cylinder_contact(x, v, chains, cyl, dt, fn, ft, fc)
     return n, fn, ft, fc
 
 
@@ -559,19 +559,20 @@ def test_chains_on_a_pin_act_independently_and_the_pin_gets_their_sum():
     v = _z(len(x))
     v[:, 0] = np.repeat(0.1 * np.arange(1, 6), 4)
     start = np.arange(0, len(seg) + 1, 3)
-    cyl = (np.zeros((1, 3)), np.array([[0.0, 0, 1]]), np.array([Rc]), np.zeros((1, 3)))
+    cyl = Cylinders(np.zeros((1, 3)), np.array([[0.0, 0, 1]]), np.array([Rc]), np.zeros((1, 3)))
     hist, fn, ft, fc = np.zeros((5, 1, 3)), _z(len(x)), _z(len(x)), np.zeros((1, 3))
     for _ in range(3):                                       # history carried over steps
         fn[:], ft[:], fc[:] = 0.0, 0.0, 0.0
-        n = chain_cylinder_contact(x, v, seg, np.full(len(seg), R_W), start, mu, *cyl, k_n,
-                                   k_t, dt, hist, fn, ft, fc)
+        n = chain_cylinder_contact(x, v, WireChains(seg, np.full(len(seg), R_W), start, mu, k_n,
+                                                    k_t, hist), cyl, dt, fn, ft, fc)
     assert n == 4
     for i, (xi, si) in enumerate(wires):
         h1 = np.zeros((1, 1, 3))
         for _ in range(3):
             fni, fti = _z(4), _z(4)
-            chain_cylinder_contact(xi, v[4 * i:4 * i + 4], si, np.full(3, R_W), np.array([0, 3]),
-                                   mu, *cyl, k_n, k_t, dt, h1, fni, fti, np.zeros((1, 3)))
+            chain_cylinder_contact(xi, v[4 * i:4 * i + 4],
+                                   WireChains(si, np.full(3, R_W), np.array([0, 3]), mu, k_n, k_t,
+                                              h1), cyl, dt, fni, fti, np.zeros((1, 3)))
         np.testing.assert_array_equal(fn[4 * i:4 * i + 4], fni)
         np.testing.assert_array_equal(ft[4 * i:4 * i + 4], fti)
         np.testing.assert_array_equal(hist[i], h1[0])

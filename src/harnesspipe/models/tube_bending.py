@@ -36,7 +36,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact, facets_cylinder_gaps
+from harnesspipe.fe.contact.common import Cylinders
+from harnesspipe.fe.contact.facet_pins import (PinFacetSet, facets_cylinder_contact,
+                                              facets_cylinder_gaps)
 from harnesspipe.fe.elements.shell_bt import (init_shell_state, shell_energies, shell_forces,
                                                shell_lumped_mass, shell_stable_step)
 from harnesspipe.fe.elements.shell_bt_element import MAT_TUBE
@@ -215,10 +217,10 @@ class TubeBendingSystem:
                      self.f_el, F[0], sign=-1.0)
         p = self.pins
         p.force[...] = 0.0
-        facets_cylinder_contact(
-            self.x, v, self.tube.conn, self.tube.contact_t, self.mu, p.centres, p.axes, p.radii,
-            np.zeros(3), p.velocity, self.k_n, self.k_n, dt, self.hist_q, self.hist_ft, F[1], F[2],
-            p.force)
+        fset = PinFacetSet(self.tube.conn, self.tube.contact_t, self.mu, np.zeros(3), self.k_n,
+                           self.k_n, self.hist_q, self.hist_ft)
+        pins = Cylinders(p.centres, p.axes, p.radii, p.velocity)
+        facets_cylinder_contact(self.x, v, fset, pins, dt, F[1], F[2], p.force)
         return F
 
     def advance(self, du, t):

@@ -9,9 +9,11 @@ groups once and again when an array is replaced (after a contact search).  Insid
 taken before the loop: a store through a tuple's field in the loop body itself is lost
 (Numba issue 7135, still open in 0.68).
 
-The beams' group (:class:`harnesspipe.fe.elements.beam_explicit.Beams`) and the
-wire-wire contact's (:class:`harnesspipe.fe.contact.wire_wire.WireContact`) live with the
-kernels that take them and are imported from there.
+The beams' group (:class:`harnesspipe.fe.elements.beam_explicit.Beams`), the wire-wire
+contact's (:class:`harnesspipe.fe.contact.wire_wire.WireContact`) and the pins'
+(:class:`harnesspipe.fe.contact.common.Cylinders`) live with the kernels that take them
+and are imported from there; the stacked groups below are cut into the kernels' own
+groups (:class:`~harnesspipe.fe.contact.node_facet.FacetSet`, ...) one member at a time.
 
 Stacked groups (node-facet sets, tie groups, pin-facet groups) hold their members'
 arrays one after the other (:func:`harnesspipe.fe.assembly.lanes.stack_groups`),
@@ -23,6 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from harnesspipe.fe.contact.common import Cylinders   # noqa: F401  (re-exported)
 from harnesspipe.fe.contact.wire_wire import WireContact   # noqa: F401  (re-exported)
 from harnesspipe.fe.elements.beam_explicit import Beams   # noqa: F401  (re-exported)
 
@@ -93,14 +96,6 @@ class CohesiveLaw(NamedTuple):
     delta_f: float          # separation at failure
     alpha_d: float          # mixed-mode exponent
     order: np.ndarray       # (n_groups, 2) kind (0: quad, 1: beam) and group, in acting order
-
-
-class Cylinders(NamedTuple):
-    """Rigid cylinders (the test's rollers and loading pin); none: zero rows."""
-    centres: np.ndarray     # (n_cyl, 3)
-    axes: np.ndarray        # (n_cyl, 3) unit axes
-    radii: np.ndarray       # (n_cyl,)
-    velocity: np.ndarray    # (n_cyl, 3)
 
 
 class WirePins(NamedTuple):

@@ -34,9 +34,9 @@ from numba import njit, prange
 from harnesspipe.fe.assembly.groups import Cylinders, PinFacets, WirePins
 from harnesspipe.fe.contact.cohesive_ties import (BeamTieSet, QuadTieSet, TieLaw,
                                                    cohesive_ties_beam, cohesive_ties_quad_serial)
-from harnesspipe.fe.contact.facet_pins import facets_cylinder_contact
+from harnesspipe.fe.contact.facet_pins import PinFacetSet, facets_cylinder_contact
 from harnesspipe.fe.contact.node_facet import FacetSet, node_facet_contact_serial
-from harnesspipe.fe.contact.wire_pins import chain_cylinder_contact_serial
+from harnesspipe.fe.contact.wire_pins import WireChains, chain_cylinder_contact_serial
 from harnesspipe.fe.contact.wire_wire import beam_beam_contact
 from harnesspipe.fe.elements.beam_explicit import beam_range_forces, beam_scatter
 from harnesspipe.fe.elements.shell_bt import scatter_add, shell_element_forces_serial
@@ -148,16 +148,15 @@ def _ties(x, v, quat, seg, qt, bt, law, f_c):
 def _cylinders(x, v, dt, w, p, wp, pf, forces):
     """The pins against the wires, then against each facet group; returns the number of
     active contacts."""
-    n = chain_cylinder_contact_serial(x, v, w.seg, w.seg_r, wp.start, wp.mu, p.centres, p.axes,
-                                      p.radii, p.velocity, wp.k, wp.k, dt, wp.hist, forces.f_pn,
-                                      forces.f_pt, forces.f_cyl)
+    chains = WireChains(w.seg, w.seg_r, wp.start, wp.mu, wp.k, wp.k, wp.hist)
+    n = chain_cylinder_contact_serial(x, v, chains, p, dt, forces.f_pn, forces.f_pt,
+                                      forces.f_cyl)
     for g in range(pf.prm.shape[0]):
         q0, q1 = pf.off[g, 0], pf.off[g + 1, 0]
         r0, r1 = pf.off[g, 1], pf.off[g + 1, 1]
-        n += facets_cylinder_contact(x, v, pf.quads[q0:q1], pf.t[q0:q1], pf.prm[g, 0],
-                                     p.centres, p.axes, p.radii, pf.slack[r0:r1], p.velocity,
-                                     pf.prm[g, 1], pf.prm[g, 1], dt, pf.hist_q[r0:r1],
-                                     pf.hist[r0:r1], forces.f_pn, forces.f_pt, forces.f_cyl)
+        fset = PinFacetSet(pf.quads[q0:q1], pf.t[q0:q1], pf.prm[g, 0], pf.slack[r0:r1],
+                           pf.prm[g, 1], pf.prm[g, 1], pf.hist_q[r0:r1], pf.hist[r0:r1])
+        n += facets_cylinder_contact(x, v, fset, p, dt, forces.f_pn, forces.f_pt, forces.f_cyl)
     return n
 
 

@@ -42,6 +42,7 @@ Normal law everywhere: ``p = k_n max(-gap, 0)`` (linear penalty, no contact damp
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -52,6 +53,14 @@ DEFAULT_MAXS = 8        # partner slots per owner of a slot history (grown by fi
 CHUNK = 64              # items per parallel task (scratch arrays are allocated per task)
 SERIAL_MAX_CHUNKS = 1   # up to this many tasks a loop runs serially (no parallel-region cost)
 REJECT_TOL = 1e-9       # relative slack of the early distance rejects (round-off of the points)
+
+
+class Cylinders(NamedTuple):
+    """Rigid unbounded cylinders (the test's rollers and loading pin); none: zero rows."""
+    centres: np.ndarray     # (n_cyl, 3) a point of each axis
+    axes: np.ndarray        # (n_cyl, 3) unit axes
+    radii: np.ndarray       # (n_cyl,)
+    velocity: np.ndarray    # (n_cyl, 3)
 
 
 def new_slot_history(n_owner, maxs=DEFAULT_MAXS, points=1):

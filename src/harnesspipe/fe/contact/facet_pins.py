@@ -6,6 +6,7 @@ the reaction added to each cylinder.  Conventions: :mod:`harnesspipe.fe.contact.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -18,6 +19,18 @@ from harnesspipe.fe.vec3 import dot
 LM_DAMP = 1e-9          # facet-to-axis projection: Levenberg term (x trace) for facets parallel to a pin
 PATCH_REACH = 1.0       # facets within this x R of a pin's surface form its contact patches
 SOFTMIN_TAU = 0.01      # mm: width of the soft minimum of a patch's facet gaps (pin contact)
+
+
+class PinFacetSet(NamedTuple):
+    """A set of shell facets on the cylinders (:func:`facets_cylinder_contact`)."""
+    quads: np.ndarray       # (n_q, 4) node ids
+    quad_t: np.ndarray      # (n_q,) thicknesses
+    mu: float               # Coulomb friction (the pins' mu_rtb or mu_rtp)
+    slack: np.ndarray       # (n_cyl,) gap allowance per cylinder, held for the run
+    k_n: float              # normal penalty
+    k_t: float              # stick penalty
+    hist_q: np.ndarray      # (n_cyl, maxs) int64 the patches' quads, in place
+    hist_ft: np.ndarray     # (n_cyl, maxs, 3) their friction forces, in place
 
 
 @njit(cache=True)
@@ -202,10 +215,10 @@ def facets_cylinder_gaps(x, quads, quad_t, cyl_c, cyl_axis, cyl_R):
 
 
 @njit(cache=True)
-def facets_cylinder_contact(x, v, quads, quad_t, mu, cyl_c, cyl_axis, cyl_R, cyl_slack, cyl_v,
-                            k_n, k_t, dt, hist_q, hist_ft, f_n, f_t, f_cyl):
-    """Penalty contact of a set of shell facets (a tube, a tape) with rigid unbounded
-    cylinders (the pins), Coulomb friction.
+def facets_cylinder_contact(x, v, fset, cyl, dt, f_n, f_t, f_cyl):
+    """Penalty contact of a set of shell facets (a tube, a tape; ``fset``:
+    :class:`PinFacetSet`) with rigid unbounded cylinders (the pins; ``cyl``:
+    :class:`~harnesspipe.fe.contact.common.Cylinders`), Coulomb friction.
 
     A pin crosses the tube at right angles: they touch at one point, which lies between
     the shell's nodes in general.  Nodes alone (spheres of radius t/2 at the nodes) let a
@@ -243,6 +256,9 @@ def facets_cylinder_contact(x, v, quads, quad_t, mu, cyl_c, cyl_axis, cyl_R, cyl
     ``f_cyl`` (n_cyl, 3): force ON each cylinder, ADDED.  Returns the number of active
     (patch, cylinder) contacts.
     """
+    quads, quad_t, mu, cyl_slack = fset.quads, fset.quad_t, fset.mu, fset.slack
+    k_n, k_t, hist_q, hist_ft = fset.k_n, fset.k_t, fset.hist_q, fset.hist_ft
+    cyl_c, cyl_axis, cyl_R, cyl_v = cyl.centres, cyl.axes, cyl.radii, cyl.velocity
     n_cyl = cyl_c.shape[0]
     maxs = hist_q.shape[1]
     cand, prj_all, patch, weight = _patch_scratch(quads.shape[0])

@@ -6,6 +6,7 @@ and constant-mu Coulomb friction, the reaction added to each cylinder.  Conventi
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -13,6 +14,17 @@ from numba import njit, prange
 from harnesspipe.fe.contact.common import to_tangent_plane
 from harnesspipe.fe.materials.friction import coulomb_return_map
 from harnesspipe.fe.vec3 import dot
+
+
+class WireChains(NamedTuple):
+    """Wires as chains of segments on the cylinders (:func:`chain_cylinder_contact`)."""
+    seg: np.ndarray         # (n_seg, 2) node ids, consecutive along each wire
+    seg_r: np.ndarray       # (n_seg,) radii
+    start: np.ndarray       # (n_chains + 1,) first segment of each chain
+    mu: float               # Coulomb friction (the pins' mu_rtb)
+    k_n: float              # normal penalty
+    k_t: float              # stick penalty
+    hist_ft: np.ndarray     # (n_chains, n_cyl, 3) friction history, in place
 
 
 @njit(cache=True)
@@ -45,10 +57,14 @@ def _chain_closest(x, seg, seg_r, e0, e1, c0, ax, R):
 
 
 @njit(cache=True)
-def _chain_pins(x, v, seg, seg_r, chain_start, w, mu, cyl_c, cyl_axis, cyl_R, cyl_v, k_n, k_t,
-                dt, hist_ft, f_n, f_t, part, act, nv, dg, fold, fnew, ds):
+def _chain_pins(x, v, chains, w, cyl, dt, f_n, f_t, part, act, scr):
     """Chain ``w`` against every cylinder (:func:`chain_cylinder_contact`): forces on its
-    nodes into ``f_n``, ``f_t``, on the cylinders into ``part[w]``, contacts into act[w]."""
+    nodes into ``f_n``, ``f_t``, on the cylinders into ``part[w]``, contacts into act[w];
+    ``scr`` (5, 3) scratch."""
+    seg, seg_r, chain_start, mu = chains.seg, chains.seg_r, chains.start, chains.mu
+    k_n, k_t, hist_ft = chains.k_n, chains.k_t, chains.hist_ft
+    cyl_c, cyl_axis, cyl_R, cyl_v = cyl.centres, cyl.axes, cyl.radii, cyl.velocity
+    nv, dg, fold, fnew, ds = scr[0], scr[1], scr[2], scr[3], scr[4]
     n_cyl = cyl_c.shape[0]
     for c in range(n_cyl):
         ax = cyl_axis[c]
@@ -90,14 +106,14 @@ def _chain_pins(x, v, seg, seg_r, chain_start, w, mu, cyl_c, cyl_axis, cyl_R, cy
 
 
 @njit(cache=True, parallel=True)
-def chain_cylinder_contact(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, cyl_R, cyl_v,
-                           k_n, k_t, dt, hist_ft, f_n, f_t, f_cyl):
+def chain_cylinder_contact(x, v, chains, cyl, dt, f_n, f_t, f_cyl):
     """Penalty contact of beam chains (wires) with rigid unbounded cylinders, Coulomb friction.
 
     A wire meets a 5 mm pin over a few millimetres, less than its element length: nodes
-    alone (spheres at the nodes) let a wire whose nodes straddle a roller fall
-    through it.  Here each chain (the segments ``chain_start[w] .. chain_start[w + 1] - 1``
-    of ``seg``, consecutive along the wire) touches each cylinder at most once, at the point
+    alone (spheres at the nodes) let a wire whose nodes straddle a roller fall through it.
+    Here each chain of ``chains`` (:class:`WireChains`: the segments ``start[w] ..
+    start[w + 1] - 1`` of ``seg``, consecutive along the wire) touches each cylinder of
+    ``cyl`` (:class:`~harnesspipe.fe.contact.common.Cylinders`) at most once, at the point
     of the chain closest to the cylinder's axis: gap ``g = min over the chain of (distance
     to the axis - R - r)``, normal force ``k_n max(-g, 0)`` along the radial direction,
     shared by the segment's end nodes with the weights ``(1 - s, s)``.  The minimum distance
@@ -110,8 +126,8 @@ def chain_cylinder_contact(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, c
     (each moves only its own nodes and history; the cylinders' forces are summed per
     chain, then in chain order).
     """
-    n_cyl = cyl_c.shape[0]
-    n_ch = chain_start.shape[0] - 1
+    n_cyl = cyl.centres.shape[0]
+    n_ch = chains.start.shape[0] - 1
     part = np.empty((n_ch, n_cyl, 3))        # force on each cylinder from each chain
     act = np.empty(n_ch, dtype=np.int64)     # (filled by hand: np.zeros would be a parallel loop)
     for w in range(n_ch):
@@ -121,33 +137,22 @@ def chain_cylinder_contact(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, c
                 part[w, c, k] = 0.0
     size = (n_ch + 1) // 2                   # two tasks (scratch allocated per task)
     for task in prange(2):
-        nv = np.empty(3)
-        dg = np.empty(3)
-        fold = np.empty(3)
-        fnew = np.empty(3)
-        ds = np.empty(3)
+        scr = np.empty((5, 3))
         for w in range(task * size, min(n_ch, (task + 1) * size)):
-            _chain_pins(x, v, seg, seg_r, chain_start, w, mu, cyl_c, cyl_axis, cyl_R, cyl_v,
-                        k_n, k_t, dt, hist_ft, f_n, f_t, part, act, nv, dg, fold, fnew, ds)
+            _chain_pins(x, v, chains, w, cyl, dt, f_n, f_t, part, act, scr)
     return _chain_sum(act, part, f_cyl)
 
 
 @njit(cache=True)
-def chain_cylinder_contact_serial(x, v, seg, seg_r, chain_start, mu, cyl_c, cyl_axis, cyl_R,
-                                  cyl_v, k_n, k_t, dt, hist_ft, f_n, f_t, f_cyl):
+def chain_cylinder_contact_serial(x, v, chains, cyl, dt, f_n, f_t, f_cyl):
     """Serial twin of :func:`chain_cylinder_contact` (for a caller that runs it beside
     other work); the same arithmetic, the same results."""
-    n_ch = chain_start.shape[0] - 1
-    part = np.zeros((n_ch, cyl_c.shape[0], 3))
+    n_ch = chains.start.shape[0] - 1
+    part = np.zeros((n_ch, cyl.centres.shape[0], 3))
     act = np.zeros(n_ch, dtype=np.int64)
-    nv = np.empty(3)
-    dg = np.empty(3)
-    fold = np.empty(3)
-    fnew = np.empty(3)
-    ds = np.empty(3)
+    scr = np.empty((5, 3))
     for w in range(n_ch):
-        _chain_pins(x, v, seg, seg_r, chain_start, w, mu, cyl_c, cyl_axis, cyl_R, cyl_v, k_n,
-                    k_t, dt, hist_ft, f_n, f_t, part, act, nv, dg, fold, fnew, ds)
+        _chain_pins(x, v, chains, w, cyl, dt, f_n, f_t, part, act, scr)
     return _chain_sum(act, part, f_cyl)
 
 
