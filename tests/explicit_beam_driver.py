@@ -72,7 +72,8 @@ import numpy as np
 import pandas as pd
 from numba import njit
 
-from harnesspipe.fe.elements.beam import NDOF_NODE, assemble_beams
+from harnesspipe.fe.elements.beam import (NDOF_NODE, BeamMesh, FibreMaterial, FibreSection,
+                                          assemble_beams)
 from harnesspipe.fe.rotation import rotate_nodes
 from harnesspipe.fe.solvers.central_difference import ExplicitError, smooth_step
 
@@ -175,9 +176,10 @@ class BeamExplicit:
 
     def internal_force(self, want_tangent: bool = False):
         s, m = self.s, self.s.material
-        assemble_beams(s.X, s.conn, s.R0, s.u, s.quat, s.xi_g, s.w_g, s.y, s.z, s.area, s.GJ,
-                       m.E, m.sigma_y, m.K, m.n, m.elastic, s.hist[0], s.hist[1],
-                       s.hist_trial[0], s.hist_trial[1], want_tangent, self._f, s.band, s.bandwidth)
+        assemble_beams(BeamMesh(s.X, s.conn, s.R0, s.xi_g, s.w_g), s.u, s.quat,
+                       FibreSection(s.y, s.z, s.area, s.GJ),
+                       FibreMaterial(m.E, m.sigma_y, m.K, m.n), m.elastic, s.hist, s.hist_trial,
+                       want_tangent, self._f, s.band, s.bandwidth)
         return self._f
 
     def tangent(self):

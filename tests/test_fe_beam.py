@@ -21,14 +21,16 @@ class Element:
         self.y, self.z, self.A = disc_fibres(2.0, 3, 8)
         self.xi, self.w = beam.lobatto_points(3)
         shape = (1, self.xi.size, self.y.size)
-        self.hist = [np.zeros(shape) for _ in range(4)]
+        self.hist = [np.zeros((2,) + shape) for _ in range(2)]     # committed, trial
         self.bw = beam.band_width(self.conn)
 
     def force_tangent(self, u, quat, elastic):
         f = np.zeros(12)
         band = np.zeros((2 * self.bw + 1, 12))
-        beam.assemble_beams(self.X, self.conn, self.R0, u, quat, self.xi, self.w, self.y, self.z,
-                            self.A, GJ, E, SIGMA_Y, K, N, elastic, *self.hist, True, f, band, self.bw)
+        beam.assemble_beams(beam.BeamMesh(self.X, self.conn, self.R0, self.xi, self.w), u, quat,
+                            beam.FibreSection(self.y, self.z, self.A, GJ),
+                            beam.FibreMaterial(E, SIGMA_Y, K, N), elastic, *self.hist, True, f,
+                            band, self.bw)
         Kd = np.zeros((12, 12))
         for j in range(12):
             for i in range(max(0, j - self.bw), min(12, j + self.bw + 1)):

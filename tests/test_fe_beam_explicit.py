@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from harnesspipe.fe.elements.beam import assemble_beams, initial_frames, lobatto_points
+from harnesspipe.fe.elements.beam import (BeamMesh, FibreMaterial, FibreSection, assemble_beams,
+                                          initial_frames, lobatto_points)
 from harnesspipe.fe.elements.beam_explicit import (Beams, beam_forces, beam_lumped_mass,
                                                    beam_plastic_work, beam_stable_step)
 from harnesspipe.fe.materials.fiber import disc_fibres
@@ -51,17 +52,17 @@ def test_parallel_forces_equal_assembled_beams_per_body():
     beam_forces(beams, X + u, quat, f_int, 2)
     for body in (0, 1):
         sl = slice(body * half, (body + 1) * half)
-        h = [np.zeros((half, ng, nf)) for _ in range(4)]
+        h = np.zeros((2, half, ng, nf))                        # the trial history
         f = np.zeros(6 * X.shape[0])
         band = np.zeros((1, 1))
-        y, z, a = secs[body]
-        assemble_beams(X, conn[sl], R0[sl], u, quat, xi, w, y, z, a, GJ[body], *mats[body],
-                       False, *h, False, f, band, 0)
+        assemble_beams(BeamMesh(X, conn[sl], R0[sl], xi, w), u, quat,
+                       FibreSection(*secs[body], GJ[body]), FibreMaterial(*mats[body]), False,
+                       np.zeros((2, half, ng, nf)), h, False, f, band, 0)
         nodes = np.unique(conn[sl])
         np.testing.assert_allclose(f_int[nodes].ravel(), f.reshape(-1, 6)[nodes].ravel(),
                                    rtol=1e-12, atol=1e-10)
-        np.testing.assert_array_equal(hist[1][sl], h[3])        # new alpha
-        np.testing.assert_allclose(hist[2][sl], h[3] ** mats[body, 3], rtol=1e-13)   # alpha^n
+        np.testing.assert_array_equal(hist[1][sl], h[1])        # new alpha
+        np.testing.assert_allclose(hist[2][sl], h[1] ** mats[body, 3], rtol=1e-13)   # alpha^n
     assert np.abs(f_int).max() > 1.0            # the state is strained (yielded)
     assert hist[1].max() > 0.0
     W = beam_plastic_work(beams)

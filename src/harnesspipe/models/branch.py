@@ -16,7 +16,8 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe.fe.assembly.band import scatter_pair
-from harnesspipe.fe.elements.beam import NDOF_NODE, assemble_beams, initial_frames, lobatto_points
+from harnesspipe.fe.elements.beam import (NDOF_NODE, BeamMesh, FibreMaterial, FibreSection,
+                                          assemble_beams, initial_frames, lobatto_points)
 from harnesspipe.fe.elements.bushing import bushing_response, bushing_stiffness
 from harnesspipe.fe.elements.truss import truss_response
 from harnesspipe.fe.materials.fiber import disc_fibres
@@ -261,10 +262,10 @@ class YHarness:
         self.band[:] = 0.0
         for part in self.beams:
             m = part.material
-            assemble_beams(self.X, part.conn, part.R0, self.u, self.quat, self.xi_g, self.w_g,
-                           part.y, part.z, part.area, part.GJ, m.E, m.sigma_y, m.K, m.n, m.elastic,
-                           part.hist[0], part.hist[1], part.hist_trial[0], part.hist_trial[1],
-                           True, self._f_part, self._band_part, self.bandwidth)
+            assemble_beams(BeamMesh(self.X, part.conn, part.R0, self.xi_g, self.w_g), self.u,
+                           self.quat, FibreSection(part.y, part.z, part.area, part.GJ),
+                           FibreMaterial(m.E, m.sigma_y, m.K, m.n), m.elastic, part.hist,
+                           part.hist_trial, True, self._f_part, self._band_part, self.bandwidth)
             self.f += self._f_part
             self.band += self._band_part
         fe, Ke = np.zeros(12), np.zeros((12, 12))

@@ -24,7 +24,8 @@ import numpy as np
 import pandas as pd
 
 from harnesspipe.fe.contact.beam_cylinder import assemble_contact
-from harnesspipe.fe.elements.beam import (NDOF_NODE, assemble_beams, band_width, initial_frames,
+from harnesspipe.fe.elements.beam import (NDOF_NODE, BeamMesh, FibreMaterial, FibreSection,
+                                          assemble_beams, band_width, initial_frames,
                                           lobatto_points)
 from harnesspipe.fe.materials.fiber import disc_fibres
 from harnesspipe.fe.rotation import in_plane_angle, rotate_nodes
@@ -183,10 +184,10 @@ class BeamSystem:
     # -- physics ---------------------------------------------------------------
     def evaluate(self, want_tangent: bool):
         m = self.material
-        assemble_beams(self.X, self.conn, self.R0, self.u, self.quat, self.xi_g, self.w_g,
-                       self.y, self.z, self.area, self.GJ, m.E, m.sigma_y, m.K, m.n, m.elastic,
-                       self.hist[0], self.hist[1], self.hist_trial[0], self.hist_trial[1],
-                       want_tangent, self.f, self.band, self.bandwidth)
+        assemble_beams(BeamMesh(self.X, self.conn, self.R0, self.xi_g, self.w_g), self.u,
+                       self.quat, FibreSection(self.y, self.z, self.area, self.GJ),
+                       FibreMaterial(m.E, m.sigma_y, m.K, m.n), m.elastic, self.hist,
+                       self.hist_trial, want_tangent, self.f, self.band, self.bandwidth)
         ref = np.sqrt(self.f @ self.f)
         if self.cylinders is not None:
             c = self.cylinders

@@ -55,6 +55,15 @@ class FibreMaterial(NamedTuple):
     n: float
 
 
+class BeamMesh(NamedTuple):
+    """Elements of one fibre section and material (:func:`assemble_beams`)."""
+    X: np.ndarray           # (n_nodes, 3) initial positions
+    conn: np.ndarray        # (n_el, 2) node ids
+    R0: np.ndarray          # (n_el, 3, 3) initial element frames
+    xi_g: np.ndarray        # (ng,) Gauss-Lobatto points along the element
+    w_g: np.ndarray         # (ng,) their weights
+
+
 class FibreHistory(NamedTuple):
     """Fibre history of one element: committed arrays read, trial arrays written."""
     eps_p_old: np.ndarray   # (ng, nf) signed plastic strain
@@ -504,18 +513,21 @@ def scatter_element(a, b, fe, Ke, want_tangent, f, band, bw):
 
 
 @njit(cache=True)
-def assemble_beams(X, conn, R0, u, quat, xi_g, w_g, y, z, area, GJ, E, sigma_y, K, n, elastic,
-                   eps_p_c, alpha_c, eps_p_t, alpha_t, want_tangent, f, band, bw):
-    """Internal force ``f`` and (if ``want_tangent``) the tangent in band storage.
+def assemble_beams(mesh, u, quat, sec, mat, elastic, hist, hist_trial, want_tangent, f, band,
+                   bw):
+    """Internal force ``f`` and (if ``want_tangent``) the tangent in band storage of the
+    elements of ``mesh`` (:class:`BeamMesh`) at the nodal displacements ``u`` (n_nodes, 3)
+    and rotations ``quat`` (n_nodes, 4), section ``sec`` (:class:`FibreSection`), material
+    ``mat`` (:class:`FibreMaterial`, ``elastic``: no return map).
 
-    ``band[bw + i - j, j] = K[i, j]`` (the layout of scipy.linalg.solve_banded).
-    Trial history is written to ``eps_p_t, alpha_t``; committed arrays are only read.
+    ``band[bw + i - j, j] = K[i, j]`` (the layout of scipy.linalg.solve_banded).  History
+    (2, n_el, ng, nf), rows signed plastic strain and accumulated plastic strain: the trial
+    one is written to ``hist_trial``; the committed ``hist`` is only read.
     """
+    X, conn, R0 = mesh.X, mesh.conn, mesh.R0
     f[:] = 0.0
     if want_tangent:
         band[:, :] = 0.0
-    sec = FibreSection(y, z, area, GJ)
-    mat = FibreMaterial(E, sigma_y, K, n)
     work = beam_work()
     fe = np.empty(12)
     Ke = np.zeros((12, 12))
@@ -527,8 +539,9 @@ def assemble_beams(X, conn, R0, u, quat, xi_g, w_g, y, z, area, GJ, E, sigma_y, 
         for i in range(3):
             x1[i] = X[a, i] + u[a, i]
             x2[i] = X[b, i] + u[b, i]
-        element_response(X[a], X[b], R0[e], x1, x2, quat[a], quat[b], xi_g, w_g, sec, mat, elastic,
-                         FibreHistory(eps_p_c[e], alpha_c[e], eps_p_t[e], alpha_t[e]),
+        element_response(X[a], X[b], R0[e], x1, x2, quat[a], quat[b], mesh.xi_g, mesh.w_g, sec,
+                         mat, elastic,
+                         FibreHistory(hist[0, e], hist[1, e], hist_trial[0, e], hist_trial[1, e]),
                          want_tangent, fe, Ke, work)
         scatter_element(a, b, fe, Ke, want_tangent, f, band, bw)
 
