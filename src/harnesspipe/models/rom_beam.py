@@ -23,7 +23,8 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from harnesspipe.fe.contact.beam_cylinder import assemble_contact
+from harnesspipe.fe.contact.beam_cylinder import (BeamChain, ContactLaw, ContactState, Rollers,
+                                                   assemble_contact)
 from harnesspipe.fe.elements.beam import (NDOF_NODE, BeamMesh, FibreMaterial, FibreSection,
                                           assemble_beams, band_width, initial_frames,
                                           lobatto_points)
@@ -192,12 +193,13 @@ class BeamSystem:
         if self.cylinders is not None:
             c = self.cylinders
             last = self._committed
-            assemble_contact(self.X, self.conn, self.R0, self.u, self.quat, last["u"], last["quat"],
-                             self.centres, last["centres"], c.axes, c.radii, self.bilateral,
-                             self.radius, self.k_n,
-                             c.mu, self.k_n, self.ft, self.ft_trial, want_tangent, self.f,
-                             self.band, self.bandwidth, self.cyl_reactions, self.pressures,
-                             self.status, self.xis)
+            assemble_contact(
+                BeamChain(self.X, self.conn, self.R0, self.u, self.quat, last["u"], last["quat"]),
+                Rollers(self.centres, last["centres"], c.axes, c.radii, self.bilateral),
+                ContactLaw(self.radius, self.k_n, c.mu, self.k_n),
+                ContactState(self.ft, self.ft_trial, self.cyl_reactions, self.pressures,
+                             self.status, self.xis),
+                want_tangent, self.f, self.band, self.bandwidth)
             ref = max(ref, np.sqrt(np.sum(self.cyl_reactions ** 2)))
         r = self.f - self.lam * self.load
         self.reaction_dofs[:] = r[self.fixed]

@@ -33,6 +33,8 @@ crosses a node its stick force restarts at zero (immaterial once sliding).
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -48,6 +50,80 @@ NEWTON_IT = 20
 ACTIVE_GAP = 1.0e-2
 FAR, INTERIOR, AT_START, AT_END = 0, 1, 2, 3
 FD_STEP = 1.0e-7   # forward-difference step of the contact tangent (relative to r_beam / 1 rad)
+
+
+class BeamChain(NamedTuple):
+    """The beam elements, now and at the last converged increment."""
+    X0: np.ndarray          # (n_nodes, 3) initial positions
+    conn: np.ndarray        # (n_el, 2) node ids
+    R0: np.ndarray          # (n_el, 3, 3) initial element frames
+    u: np.ndarray           # (n_nodes, 3) displacements
+    quat: np.ndarray        # (n_nodes, 4) nodal rotations
+    u_c: np.ndarray         # (n_nodes, 3) the converged ones
+    quat_c: np.ndarray      # (n_nodes, 4)
+
+
+class Rollers(NamedTuple):
+    """The rigid cylinders, now and at the last converged increment."""
+    centres: np.ndarray     # (n_cyl, 3) a point of each axis
+    centres_c: np.ndarray   # (n_cyl, 3) the converged ones
+    axes: np.ndarray        # (n_cyl, 3) unit axes
+    radii: np.ndarray       # (n_cyl,)
+    bilateral: np.ndarray   # (n_cyl,) bool: loaded at the last converged increment
+
+
+class ContactLaw(NamedTuple):
+    """Normal penalty and friction of the beam on the cylinders."""
+    r_beam: float           # the beam's radius around its centreline
+    k_n: float              # normal penalty
+    mu: float               # Coulomb friction (0: none)
+    k_t: float              # tangential penalty
+
+
+class ContactState(NamedTuple):
+    """Friction history (per cylinder and element) and what an assembly reports."""
+    ft_c: np.ndarray        # (n_cyl, n_el) committed tangential force (read)
+    ft_t: np.ndarray        # (n_cyl, n_el) trial tangential force (written)
+    reactions: np.ndarray   # (n_cyl, 3) force of the beam on each cylinder (written)
+    pressures: np.ndarray   # (n_cyl,) sum of the normal forces (written)
+    status: np.ndarray      # (n_el,) int64 work: where the closest point lies
+    xis: np.ndarray         # (n_el,) work: its element parameter
+
+
+class Ends(NamedTuple):
+    """An element's end points and nodal rotations."""
+    x1: np.ndarray          # (3,)
+    x2: np.ndarray          # (3,)
+    qa: np.ndarray          # (4,)
+    qb: np.ndarray          # (4,)
+
+
+class Roller(NamedTuple):
+    """One cylinder as one element meets it."""
+    centre: np.ndarray      # (3,)
+    centre_c: np.ndarray    # (3,) at the last converged increment
+    axis: np.ndarray        # (3,) unit
+    reach: float            # R + r_beam
+    bilateral: bool
+
+
+class ContactWork(NamedTuple):
+    """Work arrays of the element kernels, allocated once per assembly."""
+    M: np.ndarray           # (6, 3, 3)
+    V: np.ndarray           # (13, 3); V[12] the force vector of the last element_contact
+    q4: np.ndarray          # (4,)
+    T: np.ndarray           # (3, 12) transfer matrix
+    dp: np.ndarray          # (12,)
+    xp: np.ndarray          # (2, 3) perturbed ends (tangent)
+    qp: np.ndarray          # (2, 4)
+    fp: np.ndarray          # (12,) perturbed force
+
+
+@njit(cache=True)
+def _contact_work():
+    """A fresh :class:`ContactWork`."""
+    return ContactWork(np.empty((6, 3, 3)), np.empty((13, 3)), np.empty(4), np.empty((3, 12)),
+                       np.empty(12), np.empty((2, 3)), np.empty((2, 4)), np.empty(12))
 
 
 @njit(cache=True)
@@ -187,8 +263,10 @@ def _element_geometry(x1, x2, qa, qb, R0, M, th1, th2, q4):
 
 
 @njit(cache=True)
-def _closest_points(X0, conn, R0, u, quat, centre, axis, reach, status, xis, M, V, q4):
-    """Closest point (xis) and its status on every element near one cylinder."""
+def _closest_points(beam, centre, axis, reach, state, work):
+    """Closest point (``state.xis``) and its status on every element near one cylinder."""
+    X0, conn, R0, u, quat = beam.X0, beam.conn, beam.R0, beam.u, beam.quat
+    status, xis, M, V, q4 = state.status, state.xis, work.M, work.V, work.q4
     x1, x2, th1, th2, X, dX, ddX, wp, wt = V[0], V[1], V[2], V[3], V[4], V[5], V[6], V[7], V[8]
     for e in range(conn.shape[0]):
         a, b = conn[e, 0], conn[e, 1]
@@ -203,16 +281,22 @@ def _closest_points(X0, conn, R0, u, quat, centre, axis, reach, status, xis, M, 
 
 
 @njit(cache=True)
-def element_contact(x1, x2, qa, qb, x1c, x2c, qac, qbc, R0, centre, centre_c, axis, reach,
-                    bilateral, k_n, mu, k_t, ft_old, fe, M, V, q4, T, dp, two_sided=False):
-    """Contact force of one element on one cylinder, as a residual ``fe`` (12).
+def element_contact(now, then, R0, cyl, law, ft_old, fe, work, two_sided=False):
+    """Contact force of one element on one cylinder ``cyl`` (:class:`Roller`), as a
+    residual ``fe`` (12).
 
-    Inputs are the current end points and nodal quaternions and their committed
-    values (for the frictional slip).  The closest point is searched on this element
-    (clamped to it).  Returns ``(active, p, f_t)``; ``V[12]`` holds the force vector
-    ``-p n + f_t t`` (the negative of the force on the beam).  ``two_sided`` keeps the
-    contact active whatever the gap (the branch differentiated by the tangent).
+    Inputs are the current end points and nodal quaternions ``now`` and their committed
+    values ``then`` (:class:`Ends`, for the frictional slip), the element's initial frame
+    ``R0`` and its committed tangential force ``ft_old``.  The closest point is searched
+    on this element (clamped to it).  Returns ``(active, p, f_t)``; ``work.V[12]`` holds
+    the force vector ``-p n + f_t t`` (the negative of the force on the beam).
+    ``two_sided`` keeps the contact active whatever the gap (the branch differentiated by
+    the tangent).
     """
+    x1, x2, qa, qb = now.x1, now.x2, now.qa, now.qb
+    centre, axis, reach, bilateral = cyl.centre, cyl.axis, cyl.reach, cyl.bilateral
+    k_n, mu, k_t = law.k_n, law.mu, law.k_t
+    M, V, q4, T, dp = work.M, work.V, work.q4, work.T, work.dp
     th1, th2, X, dX, ddX, wp, wt = V[2], V[3], V[4], V[5], V[6], V[7], V[8]
     nvec, tvec, dc, fvec = V[9], V[10], V[11], V[12]
     Rr = M[2]
@@ -236,9 +320,9 @@ def element_contact(x1, x2, qa, qb, x1c, x2c, qac, qbc, R0, centre, centre_c, ax
     p = -k_n * gap if (gap < 0.0 or bilateral or two_sided) else 0.0
     f_t = 0.0
     if mu > 0.0:
-        _increment(x1, x2, x1c, x2c, qa, qb, qac, qbc, dp, q4, wt)
+        _increment(x1, x2, then.x1, then.x2, qa, qb, then.qa, then.qb, dp, q4, wt)
         for i in range(3):
-            dc[i] = centre[i] - centre_c[i]
+            dc[i] = centre[i] - cyl.centre_c[i]
         f_t = _friction(T, dp, dc, tvec, ft_old, p, mu, k_t)
     for i in range(3):
         fvec[i] = -p * nvec[i] + f_t * tvec[i]
@@ -248,13 +332,16 @@ def element_contact(x1, x2, qa, qb, x1c, x2c, qac, qbc, R0, centre, centre_c, ax
 
 
 @njit(cache=True)
-def _element_tangent(x1, x2, qa, qb, x1c, x2c, qac, qbc, R0, centre, centre_c, axis, reach,
-                     bilateral, k_n, mu, k_t, ft_old, fe, Ke, M, V, q4, T, dp, xp, qp, fp):
-    """Ke = d fe / d(nodal translations, spins) by forward differences (see module doc).
+def _element_tangent(now, then, R0, cyl, law, ft_old, fe, Ke, work):
+    """Ke = d fe / d(nodal translations, spins) by forward differences (see module doc;
+    arguments as :func:`element_contact`).
 
     The perturbed states keep the contact active (the active branch's derivative,
     also when the gap is about zero).
     """
+    x1, x2, qa, qb = now.x1, now.x2, now.qa, now.qb
+    xp, qp, fp, dp, q4, reach = work.xp, work.qp, work.fp, work.dp, work.q4, cyl.reach
+    perturbed = Ends(xp[0], xp[1], qp[0], qp[1])
     for j in range(12):
         node = j // 6
         k = j % 6
@@ -272,44 +359,40 @@ def _element_tangent(x1, x2, qa, qb, x1c, x2c, qac, qbc, R0, centre, centre_c, a
             for i in range(3):
                 dp[i] = h if i == k - 3 else 0.0
             rotate_spatial(qp[node], dp[:3], q4)
-        element_contact(xp[0], xp[1], qp[0], qp[1], x1c, x2c, qac, qbc, R0, centre, centre_c,
-                        axis, reach, bilateral, k_n, mu, k_t, ft_old, fp, M, V, q4, T, dp, True)
+        element_contact(perturbed, then, R0, cyl, law, ft_old, fp, work, True)
         for i in range(12):
             Ke[i, j] = (fp[i] - fe[i]) / h
 
 
 @njit(cache=True)
-def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axes, radii,
-                     bilateral, r_beam, k_n, mu, k_t, ft_c, ft_t, want_tangent, f, band, bw,
-                     reactions, pressures, status, xis):
-    """Add the contact residual (and tangent) of all cylinders to ``f`` (and ``band``).
+def assemble_contact(beam, rollers, law, state, want_tangent, f, band, bw):
+    """Add the contact residual (and tangent) of the beam ``beam`` (:class:`BeamChain`) on
+    all cylinders ``rollers`` (:class:`Rollers`) under ``law`` (:class:`ContactLaw`) to
+    ``f`` (and ``band``).
 
     ``f`` is a resistance (internal minus external): contact forces enter with a minus
-    sign.  ``reactions[c]`` receives the total force of the beam on cylinder c.
-    ``ft_t[c, e]`` receives the trial tangential force; ``ft_c`` is only read.
-    ``status``/``xis`` (n_elements) are work arrays.
+    sign.  ``state.reactions[c]`` receives the total force of the beam on cylinder c,
+    ``state.ft_t[c, e]`` the trial tangential force; ``state.ft_c`` is only read
+    (:class:`ContactState`).
     """
-    M = np.empty((6, 3, 3))
-    V = np.empty((13, 3))
+    X0, conn, R0, u, quat, u_c, quat_c = (beam.X0, beam.conn, beam.R0, beam.u, beam.quat,
+                                          beam.u_c, beam.quat_c)
+    reactions, pressures, status, ft_t = state.reactions, state.pressures, state.status, state.ft_t
+    work = _contact_work()
     W = np.empty((4, 3))
-    q4 = np.empty(4)
-    T = np.empty((3, 12))
-    dp = np.empty(12)
     fe = np.empty(12)
-    fp = np.empty(12)
     Ke = np.empty((12, 12))
-    xp = np.empty((2, 3))
-    qp = np.empty((2, 4))
     x1, x2, x1c, x2c = W[0], W[1], W[2], W[3]
-    fvec = V[12]
+    fvec = work.V[12]
     reactions[:, :] = 0.0
     pressures[:] = 0.0
     ft_t[:, :] = 0.0
     ne = conn.shape[0]
-    for c in range(centres.shape[0]):
-        axis = axes[c]
-        reach = radii[c] + r_beam
-        _closest_points(X0, conn, R0, u, quat, centres[c], axis, reach, status, xis, M, V, q4)
+    for c in range(rollers.centres.shape[0]):
+        axis = rollers.axes[c]
+        reach = rollers.radii[c] + law.r_beam
+        _closest_points(beam, rollers.centres[c], axis, reach, state, work)
+        cyl = Roller(rollers.centres[c], rollers.centres_c[c], axis, reach, rollers.bilateral[c])
         for e in range(ne):
             if not _counted(status, e, ne):
                 continue
@@ -319,10 +402,10 @@ def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axe
                 x2[i] = X0[b, i] + u[b, i]
                 x1c[i] = X0[a, i] + u_c[a, i]
                 x2c[i] = X0[b, i] + u_c[b, i]
-            active, p, f_t = element_contact(
-                x1, x2, quat[a], quat[b], x1c, x2c, quat_c[a], quat_c[b], R0[e], centres[c],
-                centres_c[c], axis, reach, bilateral[c], k_n, mu, k_t, ft_c[c, e], fe, M, V, q4,
-                T, dp)
+            now = Ends(x1, x2, quat[a], quat[b])
+            then = Ends(x1c, x2c, quat_c[a], quat_c[b])
+            active, p, f_t = element_contact(now, then, R0[e], cyl, law, state.ft_c[c, e], fe,
+                                             work)
             if not active:
                 continue
             ft_t[c, e] = f_t
@@ -330,9 +413,7 @@ def assemble_contact(X0, conn, R0, u, quat, u_c, quat_c, centres, centres_c, axe
                 reactions[c, i] += fvec[i]
             pressures[c] += p
             if want_tangent:
-                _element_tangent(x1, x2, quat[a], quat[b], x1c, x2c, quat_c[a], quat_c[b], R0[e],
-                                 centres[c], centres_c[c], axis, reach, bilateral[c], k_n, mu,
-                                 k_t, ft_c[c, e], fe, Ke, M, V, q4, T, dp, xp, qp, fp)
+                _element_tangent(now, then, R0[e], cyl, law, state.ft_c[c, e], fe, Ke, work)
             scatter_element(a, b, fe, Ke, want_tangent, f, band, bw)
 
 
