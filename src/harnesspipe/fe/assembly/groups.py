@@ -25,6 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from harnesspipe.fe.contact.cohesive_ties import BeamTieSet, QuadTieSet, TieLaw
 from harnesspipe.fe.contact.common import Cylinders   # noqa: F401  (re-exported)
 from harnesspipe.fe.contact.wire_wire import WireContact   # noqa: F401  (re-exported)
 from harnesspipe.fe.elements.beam_explicit import Beams   # noqa: F401  (re-exported)
@@ -55,47 +56,32 @@ class FacetSets(NamedTuple):
     prm: np.ndarray         # (n_sets, 5) k, pen_max, mu_s, mu_k, d_c
 
 
-class QuadTies(NamedTuple):
-    """Cohesive ties to shell quads, stacked
-    (:func:`harnesspipe.fe.contact.cohesive_ties.cohesive_ties_quad`)."""
-    tie_node: np.ndarray    # (n,) tied nodes
-    tie_quad: np.ndarray    # (n,) target quad, the group's own index
-    tie_xi: np.ndarray      # (n, 2) target point (xi, eta)
-    tie_sign: np.ndarray    # (n,) side of the node
-    tie_off: np.ndarray     # (n, 3) initial offset in the quad's frame
-    tie_area: np.ndarray    # (n,) tributary areas
-    tie_c: np.ndarray       # (n,) dashpot coefficients
-    quads: np.ndarray       # (n_q, 4) the groups' target quads
-    tie_kappa: np.ndarray   # (n,) damage history, in place
-    tie_D: np.ndarray       # (n,)
-    tie_energy: np.ndarray  # (n,)
-    off: np.ndarray         # (n_groups + 1, 2) offsets of ties, quads
+def _extended(name: str, base, extra: tuple, doc: str, drop: tuple = ()):
+    """The group ``name``: the fields of the group ``base`` (but ``drop``), then ``extra``
+    ((field, type) pairs); the base's fields keep their meaning (a stacked group holds its
+    members' rows one after the other)."""
+    fields = [(f, base.__annotations__[f]) for f in base._fields if f not in drop]
+    group = NamedTuple(name, [*fields, *extra])
+    group.__doc__ = doc
+    return group
 
 
-class BeamTies(NamedTuple):
-    """Cohesive ties to beam segments, stacked
-    (:func:`harnesspipe.fe.contact.cohesive_ties.cohesive_ties_beam`)."""
-    tie_node: np.ndarray    # (n,) tied nodes
-    tie_seg: np.ndarray     # (n,) target segment
-    tie_s: np.ndarray       # (n,) target point along it
-    tie_anchor: np.ndarray  # (n,) node whose rotation carries the arm
-    tie_arm: np.ndarray     # (n, 3) initial arm from the axis to the node
-    tie_axis: np.ndarray    # (n, 3) initial segment direction
-    tie_area: np.ndarray    # (n,)
-    tie_c: np.ndarray       # (n,)
-    tie_kappa: np.ndarray   # (n,) damage history, in place
-    tie_D: np.ndarray       # (n,)
-    tie_energy: np.ndarray  # (n,)
-    off: np.ndarray         # (n_groups + 1,) offsets of ties
+QuadTies = _extended(
+    "QuadTies", QuadTieSet, (("off", np.ndarray),),
+    """Cohesive quad tie sets (:class:`~harnesspipe.fe.contact.cohesive_ties.QuadTieSet`),
+    stacked; ``off`` (n_groups + 1, 2): the offsets of their ties and quads.""")
 
+BeamTies = _extended(
+    "BeamTies", BeamTieSet, (("off", np.ndarray),),
+    """Cohesive beam tie sets (:class:`~harnesspipe.fe.contact.cohesive_ties.BeamTieSet`,
+    without the segments: the bundle's own), stacked; ``off`` (n_groups + 1,): the
+    offsets of their ties.""", drop=("seg",))
 
-class CohesiveLaw(NamedTuple):
-    """The cohesive law of eqs. 7-10 and the order in which the tie groups act."""
-    K: np.ndarray           # (3,) K_nn, K_ss, K_tt
-    delta0: np.ndarray      # (3,) onset separations
-    delta_f: float          # separation at failure
-    alpha_d: float          # mixed-mode exponent
-    order: np.ndarray       # (n_groups, 2) kind (0: quad, 1: beam) and group, in acting order
+CohesiveLaw = _extended(
+    "CohesiveLaw", TieLaw, (("order", np.ndarray),),
+    """The cohesive law (:class:`~harnesspipe.fe.contact.cohesive_ties.TieLaw`) and
+    ``order`` (n_groups, 2): the kind (0: quad, 1: beam) and group of the tie groups, in
+    the order they act.""")
 
 
 class WirePins(NamedTuple):
