@@ -64,9 +64,9 @@ def run(profile: str, overrides: dict | None = None):
 
 def family_costs(at: float = 0.4, calls: int = 100, repeat: int = 5) -> list[str]:
     """Cost per call of each force family at the quick model's state ``at`` T into its test
-    (wires touching, fibres yielding): each family's own kernel (parallel, but for the
-    serial wire-wire contact), one after the other (tests/hifi_reference.py), against the concurrent lanes that run
-    them in a run; with the contact search and the integrator's step.  Each figure is the
+    (wires touching, fibres yielding): each family's own kernel (the parallel one where a
+    family has one), one after the other (tests/hifi_reference.py), against the concurrent
+    lanes that run them in a run; with the contact search and the integrator's step.  Each figure is the
     median over ``repeat`` rounds of the mean of ``calls`` calls from the same saved state."""
     from harnesspipe.fe.solvers.central_difference import (DynamicsSettings, close_and_kick,
                                                            integrate)
@@ -106,8 +106,9 @@ def family_costs(at: float = 0.4, calls: int = 100, repeat: int = 5) -> list[str
     us = {k: f"{1e6 * t:.0f}" for k, t in family.items()}
     return ["", f"Cost per call at {at:g} T of the quick run ({s.active} active contacts, "
             f"{s.ww_pairs.shape[0]} wire-wire candidates; median of {repeat} rounds of "
-            f"{calls} calls from the same state, us): each family's own kernel (parallel, "
-            "but for the serial wire-wire contact), one after the other -- " + ", ".join(f"{k} {t}" for k, t in us.items())
+            f"{calls} calls from the same state, us): each family's own kernel (the parallel "
+            "one where a family has one), one after the other -- "
+            + ", ".join(f"{k} {t}" for k, t in us.items())
             + f"; sum {1e6 * sum(family.values()):.0f}.  The system's forces() as a run "
             f"calls it (the same families in two concurrent lanes): {1e6 * lanes:.0f}.  A "
             f"contact search {1e6 * search:.0f} (one every {steps_per_search:.0f} steps so far).  The "

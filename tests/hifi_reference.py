@@ -1,5 +1,6 @@
-"""The bundle's forces kernel by kernel: each family's parallel kernel called on its own,
-one after the other, as before the concurrent lanes (:mod:`harnesspipe.fe.assembly.lanes`).
+"""The bundle's forces kernel by kernel: each family's own kernel (the parallel one where
+a family has one) called on its own, one after the other, as before the concurrent lanes
+(:mod:`harnesspipe.fe.assembly.lanes`).
 
 The lanes must give these forces and histories bit for bit (tests/test_bundle_lanes.py),
 and the benchmark times each family with them (bench/bench_hifi.py).  Not used by a run:

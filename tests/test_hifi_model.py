@@ -469,8 +469,8 @@ def _tie_rows_against_stiffness(s, itf, ties):
 
         def force(x):
             f = np.zeros_like(x)
-            one_tie = {k: ties[k][one] for k in ("tie_node", "tie_quad", "tie_xi", "tie_sign",
-                                                 "tie_off", "tie_area")}
+            one_tie = {name: ties[name][one] for name in ("tie_node", "tie_quad", "tie_xi",
+                                                          "tie_sign", "tie_off", "tie_area")}
             cohesive_ties_quad_serial(
                 x, np.zeros_like(x),
                 tie_set(QuadTieSet, one_tie, tie_c=np.zeros(1), quads=ties["quads"],

@@ -19,7 +19,8 @@ A table is ``results/rom/table3.csv`` (``case,E,sigma_y,K,n,reference``) or a ca
   campaign's test geometry) when present, else the config's ``three_point``.
 
 Rows whose ``status`` is not ``ok`` are skipped (a note names them); every other row must
-be complete and physical, or :class:`TableError` names the file, row, case and column.
+be complete and physical, or :class:`TableError` names the file, row, case and column (a
+file that is no CSV table: :class:`~harnesspipe.input_files.InputFileError`).
 """
 from __future__ import annotations
 

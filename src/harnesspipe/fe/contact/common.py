@@ -8,16 +8,18 @@ increment of the step that led to ``x`` is ``v dt``.  Force arrays are (n_nodes,
 every kernel ADDS the forces acting ON the nodes into them, normal (penalty) forces in
 ``f_n``, tangential friction forces in ``f_t`` and cohesive forces in their own array
 ``f_c`` (so that the caller can account the work of each; frictional dissipation is the
-work of ``f_t``).  Pair loops run in ``prange`` (serially when short: SERIAL_MAX_CHUNKS) into
-per-pair arrays, then a serial scatter adds them to the nodes (no races).  Wire-wire first
+work of ``f_t``).  Pair loops write per-pair arrays (in a ``prange`` where a kernel has a
+parallel version, serially when short: SERIAL_MAX_CHUNKS), then a serial scatter adds them
+to the nodes (no races).  Wire-wire first
 flags the touching pairs (with an early bounding-box reject of far candidates), then
 computes forces and friction for those only; node-facet rejects pairs whose node is far
 from the quad's box before projecting (:mod:`.node_facet`) and updates its history
-in place.  Each parallel kernel has a serial twin built from the same pieces
-(``*_serial``): the hi-fi bundle runs those side by side in two lanes
-(:mod:`harnesspipe.fe.assembly.lanes`), and the parallel kernels -- for a caller that runs
-one kernel at a time -- are the lanes' reference in the tests.  The wire-wire contact has
-its serial kernel only (it runs in a lane and in the tests' reference alike).
+in place.  A parallel kernel has a serial twin built from the same pieces (``*_serial``):
+the hi-fi bundle runs the serial kernels side by side in two lanes
+(:mod:`harnesspipe.fe.assembly.lanes`), and the parallel ones -- for a caller that runs one
+kernel at a time -- are the lanes' reference in the tests.  The wire-wire contact, the beam
+ties and the facet pins have a serial kernel only (it runs in a lane and in the tests'
+reference alike).
 
 History.  Each call is one committed explicit step: friction and cohesive history
 arrays are updated IN PLACE.  Do not call a kernel twice for the same step.

@@ -239,7 +239,7 @@ def facets_cylinder_contact(x, v, fset, cyl, dt, f_n, f_t, f_cyl):
     sides of a node ring): the central-difference step then made energy, ~10 % of the
     test's work; the soft one shares the force between them smoothly.  The patches are
     drawn with the margin PATCH_REACH R so that they do not split where they touch.
-    ``cyl_slack`` (n_cyl,): gap allowance per cylinder, held for the run, for a
+    ``fset.slack`` (n_cyl,): gap allowance per cylinder, held for the run, for a
     strain-free start where the soft minimum of a pin resting on the set is below zero
     (``-`` :func:`facets_cylinder_gaps` at t = 0, a few SOFTMIN_TAU at most).  The soft
     minimum moves the contact by up to tau ln(quads near the minimum) (0.014 mm where four

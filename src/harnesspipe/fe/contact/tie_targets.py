@@ -230,12 +230,13 @@ def make_ties(x, tape_nodes, node_area, quads=None, quad_t=None, quad_sign=None,
 
     Returns
     -------
-    (ties_quad, ties_seg) : dicts of arrays, the arguments of
-    :func:`cohesive_ties_quad` (``tie_node, tie_quad, tie_xi, tie_sign, tie_off,
-    tie_area``) and the segment ties (``tie_node, tie_seg, tie_s, tie_n0, tie_t0,
-    tie_off, tie_area``: :class:`harnesspipe.models.hifi.HifiSystem` turns them into the
-    arguments of :func:`cohesive_ties_beam`), plus zeroed ``tie_kappa``, ``tie_D``,
-    ``tie_energy``.
+    (ties_quad, ties_seg) : dicts of arrays, fields of
+    :class:`~harnesspipe.fe.contact.cohesive_ties.QuadTieSet` (``tie_node, tie_quad,
+    tie_xi, tie_sign, tie_off, tie_area``) and the segment ties (``tie_node, tie_seg,
+    tie_s, tie_n0, tie_t0, tie_off, tie_area``: :class:`harnesspipe.models.hifi.HifiSystem`
+    turns them into the fields of :class:`~harnesspipe.fe.contact.cohesive_ties.BeamTieSet`),
+    plus zeroed ``tie_kappa``, ``tie_D``, ``tie_energy``
+    (:func:`~harnesspipe.fe.contact.cohesive_ties.tie_set` makes the group of a dict).
     """
     x = np.ascontiguousarray(np.asarray(x, dtype=float)[:, :3])
     tape_nodes = np.asarray(tape_nodes, dtype=np.int64)

@@ -16,8 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.contact.common import (REJECT_TOL, find_slot,
-                                           free_slot, to_tangent_plane)
+from harnesspipe.fe.contact.common import REJECT_TOL, find_slot, free_slot, to_tangent_plane
 from harnesspipe.fe.contact.search import segment_closest_params
 from harnesspipe.fe.materials.friction import rate_dependent_friction
 from harnesspipe.fe.vec3 import any_perpendicular

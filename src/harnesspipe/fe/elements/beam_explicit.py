@@ -45,7 +45,7 @@ PARALLEL_MIN_EL = 64   # fewer elements per thread than this: one chunk (thread 
 class Beams(NamedTuple):
     """Co-rotational fibre beams, the one argument group of the kernels of this module.
 
-    Numba passes it as one typed tuple: a kernel reads ``beams.conn``, not its 12th
+    Numba passes it as one typed tuple: a kernel reads ``beams.conn``, not its second
     positional argument.  The arrays are the owner's own; the history and ``f_el`` are
     updated in place."""
     X0: np.ndarray          # (n_nodes, 3) initial positions
