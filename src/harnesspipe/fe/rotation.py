@@ -49,7 +49,7 @@ def quat_from_rotvec(theta, q):
     q[3] = s * theta[2]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rotvec_from_quat(q, theta):
     """Rotation vector (angle in [0, pi]) of the unit quaternion ``q`` (log map)."""
     q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
@@ -102,7 +102,7 @@ def quat_to_matrix(q, R):
     R[2, 2] = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def matrix_to_quat(R, q):
     """Unit quaternion of the rotation matrix ``R`` (Shepperd's method, stable for all R)."""
     tr = R[0, 0] + R[1, 1] + R[2, 2]
@@ -147,7 +147,7 @@ def rotate_spatial(q, dw, work4):
     quat_normalize(q)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def log_matrix(R, theta, work4):
     """Rotation vector of the rotation matrix ``R`` (log map through a quaternion)."""
     matrix_to_quat(R, work4)

@@ -67,7 +67,7 @@ def tie_set(kind, arrays: dict, **given):
     return kind(**{name: given[name] if name in given else arrays[name] for name in kind._fields})
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _tie_dashpot(c, v_node, v_target):
     """Force of a tie's dashpot on the tied node, one component: ``-c (v_node - v_target)``.
 
@@ -82,7 +82,7 @@ def _tie_dashpot(c, v_node, v_target):
     return -c * (v_node - v_target)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _cohesive_tie(delta, law, ties, j, tloc):
     """Eqs. 7-10 at tie ``j`` of ``ties`` (either set); updates its kappa, D (never
     decreasing) and dissipated energy.
@@ -229,7 +229,7 @@ def _quad_ties_commit(x, ties, pf, pv, lever, f_c):
     return n_failed
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _frame_forces(x, quads, q, xi, eta, L, p_node, f_c):
     """Forces on the quad nodes from the turning of the tie's frame (conservative ties).
 

@@ -123,7 +123,7 @@ def free_slot(hist_partner, owner):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rotate_onto_plane(f, n):
     """Project ``f`` (3,) onto the plane normal to unit ``n`` keeping |f| (in place)."""
     m0 = math.sqrt(dot(f, f))
@@ -141,7 +141,7 @@ def rotate_onto_plane(f, n):
         f[k] *= m0 / m1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def to_tangent_plane(f_old, dg, n):
     """Friction inputs on the current tangent plane (unit normal ``n``), in place: the
     committed force ``f_old`` rotated onto it (:func:`rotate_onto_plane`), the slip

@@ -14,7 +14,7 @@ from numba import njit
 from harnesspipe.fe.vec3 import dot
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def quad_tangents(x, quads, q, xi, eta, X, X_xi, X_eta):
     """Point X and tangents X_xi, X_eta of the bilinear quad q at (xi, eta) (written)."""
     for k in range(3):
@@ -34,7 +34,7 @@ def quad_tangents(x, quads, q, xi, eta, X, X_xi, X_eta):
             X_eta[k] += de * c
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def quad_eval(x, quads, q, xi, eta, X, n, e1):
     """Point X, unit normal n = unit(X_xi x X_eta), unit tangent e1 = unit(X_xi) (written)."""
     quad_tangents(x, quads, q, xi, eta, X, e1, n)    # X_eta kept in n for now

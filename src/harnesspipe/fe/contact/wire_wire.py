@@ -63,7 +63,7 @@ def _touching_arrays(flag, pts):
                     np.empty((n_act, 2)))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out, blend):
     """Contact points of segments a, b (up to ``WW_POINTS``); returns the bit mask of the
     points present (0: none).  ``w_out`` are the weights of each rule alone; the blend
@@ -144,7 +144,7 @@ def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out, blend):
     return mask
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _blend_forces(x, a0, a1, b0, b1, dUdcos, f_n):
     """Forces ``-dU/dcos * d|cos|/dx`` of the blend (``dUdcos = (U_par - U_cross) beta'``):
     the part of the pair's energy gradient that comes from beta turning with the segments."""
@@ -169,7 +169,7 @@ def _blend_forces(x, a0, a1, b0, b1, dUdcos, f_n):
         f_n[b0, c] += dUdcos * gb
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _end_projection_grad(x, a0, ea, La, bx, g):
     """Gradient of ``(x_bx - x_a0) . e_a`` (node bx projected on a's axis, in mm) with
     respect to a0, a1, bx: rows 0, 1, 2 of ``g``."""
@@ -183,7 +183,7 @@ def _end_projection_grad(x, a0, ea, La, bx, g):
         g[2, c] = ea[c]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _overlap_forces(x, a0, a1, b0, b1, coef, f_n, scr):
     """Forces ``-coef grad w`` of the parallel rule's weight w = L_ov / (L_a + L_b)
     (:func:`_segment_points`; ``coef`` = beta U_par / w): the pair's parallel energy
@@ -356,7 +356,7 @@ def _ww_commit(x, wc, t, f_n, f_t):
                 f_t[b1, c] -= u * ft
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _boxes_apart(x, a0, a1, b0, b1, r):
     """True if the bounding boxes of segments (a0, a1) and (b0, b1) are farther apart than
     ``r``: then every point pair of the segments is, and no contact point can touch."""
@@ -372,7 +372,7 @@ def _boxes_apart(x, a0, a1, b0, b1, r):
     return d2 > (r * (1.0 + REJECT_TOL)) ** 2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _segments_apart(x, a0, a1, b0, b1, r):
     """True if the segments (a0, a1) and (b0, b1) are farther apart than ``r`` (their
     closest points, :func:`segment_closest_params`): every contact point of

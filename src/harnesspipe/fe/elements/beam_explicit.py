@@ -83,7 +83,7 @@ def beam_scratch():
                        np.empty(3), np.empty(3), np.empty(4))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _section_force(e0, kappa_y, kappa_z, sec, mat, beams, e, g):
     """Stress resultants ``(N, M_y, M_z)`` of the fibre section ``sec``
     (:class:`~harnesspipe.fe.elements.beam.FibreSection`) of eq. 2 material ``mat``
@@ -275,7 +275,7 @@ def _global_force(e, f_el, W, ln, th1, th2, N, f2, f3, f5, f6, torque):
         f_el[e, 9 + i] = r0 * w20 + r1 * w21 + r2 * m22
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def element_force(e, beams, x, ia, ib, work):
     """Global internal force ``beams.f_el[e]`` (12) of element ``e``, lean path.
 

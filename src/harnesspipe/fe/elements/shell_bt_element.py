@@ -76,7 +76,7 @@ def work_arrays():
                 np.empty(3), np.empty(3), np.empty(STATE_SIZE), np.empty(4), np.empty((4, 4)))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def frame(x, i0, i1, i2, i3, ef):
     """Co-rotational frame (BLT; BLM 9.6) of the quad ``i0..i3`` of ``x``
     (n_nodes, 3): rows ef[0] = e1, ef[1] = e2, ef[2] = e3 of ``ef`` (3, 3), a pure
@@ -370,7 +370,7 @@ def _nodal_forces(e, f_el, ef, loc, area, N, M, Q, H):
             f_el[e, a, 3 + i] = mx * ef[0, i] + my * ef[1, i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, ef, loc, Dm, Dj, eps, sig,
                    st_new, w4, w44):
     """Stress update over ``dt`` and nodal forces of element ``e``: writes ``f_el[e]``

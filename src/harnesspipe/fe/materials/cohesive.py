@@ -43,7 +43,7 @@ import math
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def exponential_damage(kappa, delta_m0, delta_mf, alpha):
     """Damage ``D`` of eq. 10 at the largest effective separation ``kappa`` reached.
 
@@ -58,7 +58,7 @@ def exponential_damage(kappa, delta_m0, delta_mf, alpha):
     return 1.0 - (delta_m0 / kappa) * (1.0 - decay)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def onset_separation(delta, delta0):
     """Effective separation ``delta_m^0`` at which eq. 8 is met for the mode mix of ``delta``.
 
@@ -75,7 +75,7 @@ def onset_separation(delta, delta0):
     return dm / ratio
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def cohesive_traction(delta, K, delta0, delta_mf, alpha, kappa_old, D_old, t):
     """Traction of the damaged cohesive law (eqs. 7-10) and the updated history.
 

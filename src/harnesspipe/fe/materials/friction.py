@@ -33,7 +33,7 @@ import math
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def friction_coefficient(mu_s, mu_k, d_c, slip_rate):
     """Friction coefficient of eq. 6 at the equivalent slip rate ``slip_rate`` (physical time)."""
     return mu_k + (mu_s - mu_k) * math.exp(-d_c * slip_rate)
@@ -45,7 +45,7 @@ def equivalent_slip_rate(gamma_dot_1, gamma_dot_2):
     return math.sqrt(gamma_dot_1 * gamma_dot_1 + gamma_dot_2 * gamma_dot_2)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def coulomb_return_map(f_old, dg, k_t, mu, f_n, f_new, ds):
     """Penalty stick/slip update of a tangential contact force at a given ``mu``.
 
@@ -83,7 +83,7 @@ def coulomb_return_map(f_old, dg, k_t, mu, f_n, f_new, ds):
     return True, limit * slip
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rate_dependent_friction(f_old, dg, dt_phys, k_t, mu_s, mu_k, d_c, f_n, f_new, ds):
     """Eq. 6 friction update of one contact point over a step of PHYSICAL duration ``dt_phys``.
 

@@ -32,13 +32,13 @@ SIGMA33_TOL = 1.0e-11  # relative tolerance on sigma_33 = 0
 SIGMA33_MAXIT = 30
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _elastic_constants(E, nu):
     """Shear and bulk moduli."""
     return E / (2.0 * (1.0 + nu)), E / (3.0 * (1.0 - 2.0 * nu))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _radial_return(a11, a22, a33, a12, eps_bar_p, sa, G, kappa, sigma_y, K, n, out4, D4,
                    want_tangent):
     """3D radial return for an elastic trial strain with eps_13 = eps_23 = 0.
@@ -101,7 +101,7 @@ def j2_plane_stress(eps, state_old, E, nu, sigma_y, K, n, sig, D, state_new, wor
                                 work4, work44, True)[0]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def j2_plane_stress_from(eps, state_old, sa, E, nu, sigma_y, K, n, sig, D, state_new, work4,
                          work44, want_tangent):
     """:func:`j2_plane_stress` from a stored ``sa = eps_bar_p**n`` (history of the caller:
@@ -140,7 +140,7 @@ def j2_plane_stress_from(eps, state_old, sa, E, nu, sigma_y, K, n, sig, D, state
     return dg, sa_new
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def orthotropic_plane_stress_stiffness(E1, E2, nu12, G12, D):
     """Inverse of the eq. 12 compliance [[1/E1, -nu12/E1, 0], [-nu12/E1, 1/E2, 0],
     [0, 0, 1/G12]] (material axes 1 = warp, 2 = weft), written to ``D`` (3, 3)."""
@@ -158,7 +158,7 @@ def fabric_shear_modulus(E1: float, E2: float, nu12: float) -> float:
     return 0.5 * (E1 + E2) / (2.0 * (1.0 + nu12))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def orthotropic_plane_stress(eps, c, s, Dmat, r_c, sig):
     """Eq. 12 stress for an in-plane strain given in a frame (e1, e2) whose material
     direction 1 is ``c e1 + s e2`` (c = cos, s = sin of the angle from e1 to axis 1).

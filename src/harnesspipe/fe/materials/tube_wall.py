@@ -69,7 +69,7 @@ def to_element(n11, n22, n12, c, s):
             c * s * (n11 - n22) + (c * c - s * s) * n12)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def table_return(q, k, alpha, row, o):
     """Plastic increment d >= 0 of a 1D return onto the piecewise-linear flow table at
     ``row[o:o + 2 N_TAB]`` (abscissae alpha_j, then flow values H_j): solves
@@ -92,7 +92,7 @@ def table_return(q, k, alpha, row, o):
         j += 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def table_update(x, x_p, alpha, k, row, o_pos, o_neg):
     """1D elastoplastic resultant ``k (x - x_p)`` with the flow table at ``o_pos`` for
     positive and at ``o_neg`` for negative values (magnitudes) and one accumulated plastic
@@ -107,7 +107,7 @@ def table_update(x, x_p, alpha, k, row, o_pos, o_neg):
     return k * (x - x_p), x_p, alpha + d, d
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def tube_wall_resultants(st, me, c, s, dt, d_m, kappa):
     """Advance the resultants of one element over ``dt`` with the membrane strain rates
     ``d_m`` and curvature rates ``kappa`` (element frame, engineering shears) in the state
