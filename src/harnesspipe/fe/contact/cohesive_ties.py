@@ -159,13 +159,13 @@ def _quad_ties_range(lo, hi, x, v, ties, law, pf, pv, lever):
     tie_off, tie_area, tie_c, quads = ties.tie_off, ties.tie_area, ties.tie_c, ties.quads
     tie_D = ties.tie_D
     scr = np.empty((5, 3))
+    delta = scr[0]                      # views taken once: a view per tie costs its
+    tloc = scr[1]                       # reference count
+    X = scr[2]
+    nq = scr[3]
+    e1 = scr[4]
     for j in range(lo, hi):
         q = tie_quad[j]
-        delta = scr[0]
-        tloc = scr[1]
-        X = scr[2]
-        nq = scr[3]
-        e1 = scr[4]
         quad_eval(x, quads, q, tie_xi[j, 0], tie_xi[j, 1], X, nq, e1)
         sg = tie_sign[j]
         d0 = x[tie_node[j], 0] - X[0]
@@ -225,17 +225,18 @@ def _quad_ties_commit(x, ties, pf, pv, lever, f_c):
             f_c[quads[q, 1], c] -= N1 * f
             f_c[quads[q, 2], c] -= N2 * f
             f_c[quads[q, 3], c] -= N3 * f
-        _frame_forces(x, quads, q, xi, eta, lever[j], pf[j], f_c)
+        _frame_forces(x, quads, q, xi, eta, lever, pf, j, f_c)
     return n_failed
 
 
 @njit(cache=True, inline="always")
-def _frame_forces(x, quads, q, xi, eta, L, p_node, f_c):
+def _frame_forces(x, quads, q, xi, eta, lever, pf, j, f_c):
     """Forces on the quad nodes from the turning of the tie's frame (conservative ties).
 
     The tie's energy U(delta), delta = frame^T (x_node - X) - off, depends on the quad's
     frame (n, e1 = X_xi/|X_xi|, t = n x e1) through its rotation phi: dU/dphi = M = f x L
-    with ``f = -p`` (``p`` the force on the tied node) and the lever ``L = x_node - X``
+    with ``f = -p`` (``p = pf[j]`` the force on tie j's node) and the lever
+    ``L = lever[j] = x_node - X``
     (the tie's offset, tape mid-surface to covering mid-surface, plus the separation:
     the separation part matters once damage treats opening and closing apart).  With
     ``phi.e1 = -dn.t``, ``phi.t = dn.e1``, ``phi.n = de1.t`` the quad nodes receive,
@@ -267,10 +268,10 @@ def _frame_forces(x, quads, q, xi, eta, L, p_node, f_c):
     e0, e1_, e2 = Xx0 / lx, Xx1 / lx, Xx2 / lx
     t0, t1, t2 = n1 * e2 - n2 * e1_, n2 * e0 - n0 * e2, n0 * e1_ - n1 * e0
     # M = f x L, f = -p_node the force the quad receives
-    f0, f1, f2 = -p_node[0], -p_node[1], -p_node[2]
-    M0 = f1 * L[2] - f2 * L[1]
-    M1 = f2 * L[0] - f0 * L[2]
-    M2 = f0 * L[1] - f1 * L[0]
+    f0, f1, f2 = -pf[j, 0], -pf[j, 1], -pf[j, 2]
+    M0 = f1 * lever[j, 2] - f2 * lever[j, 1]
+    M1 = f2 * lever[j, 0] - f0 * lever[j, 2]
+    M2 = f0 * lever[j, 1] - f1 * lever[j, 0]
     Me = M0 * e0 + M1 * e1_ + M2 * e2
     Mt = M0 * t0 + M1 * t1 + M2 * t2
     Mn = M0 * n0 + M1 * n1 + M2 * n2

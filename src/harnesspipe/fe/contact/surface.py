@@ -68,10 +68,10 @@ def project_quad(x, quads, q, p, clamp, out):
     """
     xi = 0.0
     eta = 0.0
-    X0 = x[quads[q, 0]]
-    X1 = x[quads[q, 1]]
-    X2 = x[quads[q, 2]]
-    X3 = x[quads[q, 3]]
+    i0 = quads[q, 0]                # nodes indexed in place (a view per call costs its
+    i1 = quads[q, 1]                # reference count)
+    i2 = quads[q, 2]
+    i3 = quads[q, 3]
     done = False
     for it in range(8):
         a0 = 0.25 * (1 - xi) * (1 - eta)
@@ -86,15 +86,15 @@ def project_quad(x, quads, q, p, clamp, out):
         be1 = -0.25 * (1 + xi)
         be2 = 0.25 * (1 + xi)
         be3 = 0.25 * (1 - xi)
-        Xs0 = a0 * X0[0] + a1 * X1[0] + a2 * X2[0] + a3 * X3[0]
-        Xs1 = a0 * X0[1] + a1 * X1[1] + a2 * X2[1] + a3 * X3[1]
-        Xs2 = a0 * X0[2] + a1 * X1[2] + a2 * X2[2] + a3 * X3[2]
-        tx0 = bx0 * X0[0] + bx1 * X1[0] + bx2 * X2[0] + bx3 * X3[0]
-        tx1 = bx0 * X0[1] + bx1 * X1[1] + bx2 * X2[1] + bx3 * X3[1]
-        tx2 = bx0 * X0[2] + bx1 * X1[2] + bx2 * X2[2] + bx3 * X3[2]
-        te0 = be0 * X0[0] + be1 * X1[0] + be2 * X2[0] + be3 * X3[0]
-        te1 = be0 * X0[1] + be1 * X1[1] + be2 * X2[1] + be3 * X3[1]
-        te2 = be0 * X0[2] + be1 * X1[2] + be2 * X2[2] + be3 * X3[2]
+        Xs0 = a0 * x[i0, 0] + a1 * x[i1, 0] + a2 * x[i2, 0] + a3 * x[i3, 0]
+        Xs1 = a0 * x[i0, 1] + a1 * x[i1, 1] + a2 * x[i2, 1] + a3 * x[i3, 1]
+        Xs2 = a0 * x[i0, 2] + a1 * x[i1, 2] + a2 * x[i2, 2] + a3 * x[i3, 2]
+        tx0 = bx0 * x[i0, 0] + bx1 * x[i1, 0] + bx2 * x[i2, 0] + bx3 * x[i3, 0]
+        tx1 = bx0 * x[i0, 1] + bx1 * x[i1, 1] + bx2 * x[i2, 1] + bx3 * x[i3, 1]
+        tx2 = bx0 * x[i0, 2] + bx1 * x[i1, 2] + bx2 * x[i2, 2] + bx3 * x[i3, 2]
+        te0 = be0 * x[i0, 0] + be1 * x[i1, 0] + be2 * x[i2, 0] + be3 * x[i3, 0]
+        te1 = be0 * x[i0, 1] + be1 * x[i1, 1] + be2 * x[i2, 1] + be3 * x[i3, 1]
+        te2 = be0 * x[i0, 2] + be1 * x[i1, 2] + be2 * x[i2, 2] + be3 * x[i3, 2]
         if done or it == 7:
             break
         r0 = p[0] - Xs0

@@ -64,10 +64,11 @@ def _touching_arrays(flag, pts):
 
 
 @njit(cache=True, inline="always")
-def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out, blend):
-    """Contact points of segments a, b (up to ``WW_POINTS``); returns the bit mask of the
-    points present (0: none).  ``w_out`` are the weights of each rule alone; the blend
-    factor beta and its derivative d beta / d|cos| go to ``blend``.
+def _segment_points(x, seg, a, b, valence, pts, p):
+    """Contact points of segments a, b (up to ``WW_POINTS``) into ``pts[p]`` (rows s, u,
+    weight; :class:`Touching`); returns the bit mask of the points present (0: none).  The
+    weights are those of each rule alone; the blend factor beta and its derivative
+    d beta / d|cos| go to ``pts[p, 3, 0]``, ``pts[p, 3, 1]``.
 
     Point 0, crossing rule: the closest points of the two segments (clamped), weight 1,
     halved at an end node shared with another segment (that segment finds the same point).
@@ -105,28 +106,28 @@ def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out, blend):
     cosab = abs(B) / (La * Lb)
     c0, c1 = PARALLEL_COS
     if cosab <= c0:
-        blend[0] = 0.0
-        blend[1] = 0.0
+        pts[p, 3, 0] = 0.0
+        pts[p, 3, 1] = 0.0
     elif cosab >= c1:
-        blend[0] = 1.0
-        blend[1] = 0.0
+        pts[p, 3, 0] = 1.0
+        pts[p, 3, 1] = 0.0
     else:
         t = (cosab - c0) / (c1 - c0)
-        blend[0] = t * t * (3.0 - 2.0 * t)
-        blend[1] = 6.0 * t * (1.0 - t) / (c1 - c0)
+        pts[p, 3, 0] = t * t * (3.0 - 2.0 * t)
+        pts[p, 3, 1] = 6.0 * t * (1.0 - t) / (c1 - c0)
     mask = 0
-    if blend[0] < 1.0:                    # not parallel: A E - B^2 > 0
+    if pts[p, 3, 0] < 1.0:                    # not parallel: A E - B^2 > 0
         s, u = segment_closest_params(A, B, C, E, F)
         w = 1.0
         if (s == 0.0 and valence[a0] > 1) or (s == 1.0 and valence[a1] > 1):
             w *= 0.5
         if (u == 0.0 and valence[b0] > 1) or (u == 1.0 and valence[b1] > 1):
             w *= 0.5
-        s_out[0] = s
-        u_out[0] = u
-        w_out[0] = w
+        pts[p, 0, 0] = s
+        pts[p, 1, 0] = u
+        pts[p, 2, 0] = w
         mask = 1
-    if blend[0] > 0.0:
+    if pts[p, 3, 0] > 0.0:
         # parallel: common part on a's axis
         sb0 = -C / A                      # b0 on a: (b0 - a0).da / A
         sb1 = (B - C) / A                 # b1 on a
@@ -137,9 +138,9 @@ def _segment_points(x, seg, a, b, valence, s_out, u_out, w_out, blend):
             for k in range(1, 3):
                 s = lo if k == 1 else hi
                 u = (F + s * B) / E           # point of a at s, projected on b
-                s_out[k] = s
-                u_out[k] = min(1.0, max(0.0, u))
-                w_out[k] = w
+                pts[p, 0, k] = s
+                pts[p, 1, k] = min(1.0, max(0.0, u))
+                pts[p, 2, k] = w
             mask |= 6
     return mask
 
@@ -184,16 +185,14 @@ def _end_projection_grad(x, a0, ea, La, bx, g):
 
 
 @njit(cache=True, inline="always")
-def _overlap_forces(x, a0, a1, b0, b1, coef, f_n, scr):
+def _overlap_forces(x, a0, a1, b0, b1, coef, f_n, ea, eb, g_ov, g):
     """Forces ``-coef grad w`` of the parallel rule's weight w = L_ov / (L_a + L_b)
     (:func:`_segment_points`; ``coef`` = beta U_par / w): the pair's parallel energy
     ``beta w sum 1/2 k_n g^2`` changes with the overlap L_ov as the segments slide along
     each other, and this is the force of that change.  L_ov = hi - lo on a's axis (mm), each
     end either a's own end (clamped: 0 or L_a) or one of b's nodes projected on a.
-    ``scr``: (9, 3) scratch (rows: e_a, e_b, d L_ov / d (a0, a1, b_lo, b_hi), a projection's
-    gradient)."""
-    ea = scr[0]
-    eb = scr[1]
+    Scratch: ``ea``, ``eb`` (3,) the unit axes, ``g_ov`` (4, 3) d L_ov / d (a0, a1, b_lo,
+    b_hi), ``g`` (3, 3) a projection's gradient."""
     La = Lb = 0.0
     for c in range(3):
         ea[c] = x[a1, c] - x[a0, c]
@@ -214,9 +213,7 @@ def _overlap_forces(x, a0, a1, b0, b1, coef, f_n, scr):
     if hi <= lo:
         return
     L_sum = La + Lb
-    g_ov = scr[2:6]                  # d L_ov / d (a0, a1, b_lo, b_hi)
     g_ov[...] = 0.0
-    g = scr[6:9]
     if max(p0, p1) >= La:            # hi = L_a
         for c in range(3):
             g_ov[0, c] -= ea[c]
@@ -317,7 +314,8 @@ def _ww_commit(x, wc, t, f_n, f_t):
     for i in range(hist_partner.shape[0]):
         for s in range(hist_partner.shape[1]):
             hist_partner[i, s] = -1
-    scr = np.empty((9, 3))               # :func:`_overlap_forces`' scratch, once per call
+    ea, eb = np.empty(3), np.empty(3)    # :func:`_overlap_forces`' scratch, once per call
+    g_ov, g = np.empty((4, 3)), np.empty((3, 3))
     for j in range(idx.size):
         p = idx[j]
         a = pairs[p, 0]
@@ -337,7 +335,7 @@ def _ww_commit(x, wc, t, f_n, f_t):
         if pdu[j, 0] != 0.0:
             _blend_forces(x, a0, a1, b0, b1, pdu[j, 0], f_n)
         if pdu[j, 1] != 0.0:
-            _overlap_forces(x, a0, a1, b0, b1, pdu[j, 1], f_n, scr)
+            _overlap_forces(x, a0, a1, b0, b1, pdu[j, 1], f_n, ea, eb, g_ov, g)
         for k in range(WW_POINTS):
             if not (flag[p] >> k) & 1:
                 continue
@@ -417,7 +415,7 @@ def _ww_flags(x, wc, valence, flag, pts):
         rr = seg_r[a] + seg_r[b]
         if _boxes_apart(x, a0, a1, b0, b1, rr) or _segments_apart(x, a0, a1, b0, b1, rr):
             continue                                # early rejects (most candidates)
-        m = _segment_points(x, seg, a, b, valence, pts[p, 0], pts[p, 1], pts[p, 2], pts[p, 3])
+        m = _segment_points(x, seg, a, b, valence, pts, p)
         pts[p, 3, 2] = m
         f = 0
         for k in range(WW_POINTS):
@@ -444,7 +442,11 @@ def _ww_forces(x, v, wc, t, dt, dt_phys):
     hist_partner, hist_ft = wc.hist_partner, wc.hist_ft
     k_n, k_t, mu_s, mu_k, d_c = wc.k_n, wc.k_t, wc.mu_s, wc.mu_k, wc.d_c
     idx, flag, pts, pfn, pft, hnew, pdu = t.idx, t.flag, t.pts, t.pfn, t.pft, t.hnew, t.pdu
-    scr = np.zeros((4, 3))
+    fold = np.zeros(3)               # scratch taken once: a view per pair costs its
+    dg = np.zeros(3)                 # reference count
+    ds = np.zeros(3)
+    nv = np.zeros(3)
+    fnew = np.zeros(3)
     for j in range(idx.size):
         p = idx[j]
         for k in range(WW_POINTS):
@@ -456,10 +458,8 @@ def _ww_forces(x, v, wc, t, dt, dt_phys):
         b = pairs[p, 1]
         if a > b:
             a, b = b, a
-        wv = pts[p, 2]
-        bl = pts[p, 3]
-        m = int(bl[2])
-        beta = bl[0]
+        m = int(pts[p, 3, 2])
+        beta = pts[p, 3, 0]
         u_cross = 0.0
         u_par = 0.0
         slot = -2                        # looked up at the first active point
@@ -468,10 +468,6 @@ def _ww_forces(x, v, wc, t, dt, dt_phys):
         b0 = seg[b, 0]
         b1 = seg[b, 1]
         rr = seg_r[a] + seg_r[b]
-        fold = scr[0]
-        dg = scr[1]
-        ds = scr[2]
-        nv = scr[3]
         for k in range(WW_POINTS):
             if not (flag[p] >> k) & 1:
                 continue
@@ -493,12 +489,13 @@ def _ww_forces(x, v, wc, t, dt, dt_phys):
                     dg[c] = x[a1, c] - x[a0, c]
                 any_perpendicular(dg, nv)
             pn = -k_n * gap
+            wk = pts[p, 2, k]
             if k == 0:
-                u_cross += 0.5 * wv[k] * pn * (-gap)
-                w = (1.0 - beta) * wv[k]
+                u_cross += 0.5 * wk * pn * (-gap)
+                w = (1.0 - beta) * wk
             else:
-                u_par += 0.5 * wv[k] * pn * (-gap)
-                w = beta * wv[k]
+                u_par += 0.5 * wk * pn * (-gap)
+                w = beta * wk
             for c in range(3):
                 pfn[j, k, c] = w * pn * nv[c]
             if k_t <= 0.0:
@@ -510,11 +507,13 @@ def _ww_forces(x, v, wc, t, dt, dt_phys):
                 dg[c] = dt * ((1 - s) * v[a0, c] + s * v[a1, c]
                               - (1 - u) * v[b0, c] - u * v[b1, c])
             to_tangent_plane(fold, dg, nv)
-            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, hnew[j, k], ds)
+            rate_dependent_friction(fold, dg, dt_phys, k_t, mu_s, mu_k, d_c, pn, fnew, ds)
             for c in range(3):
-                pft[j, k, c] = -w * hnew[j, k, c]
-        pdu[j, 0] = (u_par - u_cross) * bl[1]
-        pdu[j, 1] = beta * u_par / wv[1] if (m & 6) and wv[1] > 0.0 else 0.0
+                hnew[j, k, c] = fnew[c]
+                pft[j, k, c] = -w * fnew[c]
+        w1 = pts[p, 2, 1]
+        pdu[j, 0] = (u_par - u_cross) * pts[p, 3, 1]
+        pdu[j, 1] = beta * u_par / w1 if (m & 6) and w1 > 0.0 else 0.0
         # a rule not in use hands its points the other's stick force (no loss at a switch)
         if m == 1:
             for c in range(3):
