@@ -16,6 +16,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from harnesspipe.fe.loops import loop_kernel
+
 SMALL_ANGLE = 1.0e-4   # below this, sin(a/2)/a and atan ratios use their Taylor series
 SERIES_ANGLE = 0.05    # below this, ratios that cancel catastrophically use their series
 
@@ -87,7 +89,7 @@ def quat_normalize(q):
         q[i] *= s
 
 
-@njit(cache=True)
+@loop_kernel
 def quat_to_matrix(q, R):
     """Rotation matrix of the unit quaternion ``q`` into ``R`` (3x3)."""
     q0, q1, q2, q3 = q[0], q[1], q[2], q[3]

@@ -7,6 +7,8 @@ import math
 
 from numba import njit
 
+from harnesspipe.fe.loops import loop_kernel
+
 
 @njit(cache=True, inline="always")
 def dot(a, b):
@@ -14,7 +16,7 @@ def dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@njit(cache=True)
+@loop_kernel
 def any_perpendicular(d, out):
     """A unit vector normal to ``d``."""
     ax = 0

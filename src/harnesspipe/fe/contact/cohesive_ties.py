@@ -15,6 +15,7 @@ from numba import njit, prange
 
 from harnesspipe.fe.contact.common import CHUNK
 from harnesspipe.fe.contact.surface import quad_eval
+from harnesspipe.fe.loops import loop_kernel
 from harnesspipe.fe.materials.cohesive import cohesive_dissipated_energy, cohesive_traction
 from harnesspipe.fe.rotation import quat_to_matrix
 from harnesspipe.fe.vec3 import dot
@@ -134,7 +135,8 @@ def cohesive_ties_quad(x, v, ties, law, f_c):
     lever = np.empty((n, 3))
     n_chunks = (n + CHUNK - 1) // CHUNK
     for ch in prange(n_chunks):
-        _quad_ties_range(ch * CHUNK, min(n, (ch + 1) * CHUNK), x, v, ties, law, pf, pv, lever)
+        _quad_ties_range(ch * CHUNK, min(n, (ch + 1) * CHUNK), x, v, ties, law, pf, pv, lever,
+                         np.empty((5, 3)))
     return _quad_ties_commit(x, ties, pf, pv, lever, f_c)
 
 
@@ -146,21 +148,20 @@ def cohesive_ties_quad_serial(x, v, ties, law, f_c):
     pf = np.empty((n, 3))
     pv = np.empty((n, 3))
     lever = np.empty((n, 3))
-    _quad_ties_range(0, n, x, v, ties, law, pf, pv, lever)
+    _quad_ties_range(0, n, x, v, ties, law, pf, pv, lever, np.empty((5, 3)))
     return _quad_ties_commit(x, ties, pf, pv, lever, f_c)
 
 
-@njit(cache=True)
-def _quad_ties_range(lo, hi, x, v, ties, law, pf, pv, lever):
+@loop_kernel
+def _quad_ties_range(lo, hi, x, v, ties, law, pf, pv, lever, scr):
     """Ties ``lo..hi-1`` of ``ties``: separation, eqs. 7-10 (damage in place) and the
     traction's force on the tied node into ``pf``, its lever about the target point into
-    ``lever``, the dashpot's force on the tied node into ``pv``."""
+    ``lever``, the dashpot's force on the tied node into ``pv``; ``scr`` (5, 3) scratch."""
     tie_node, tie_quad, tie_xi, tie_sign = ties.tie_node, ties.tie_quad, ties.tie_xi, ties.tie_sign
     tie_off, tie_area, tie_c, quads = ties.tie_off, ties.tie_area, ties.tie_c, ties.quads
     tie_D = ties.tie_D
-    scr = np.empty((5, 3))
-    delta = scr[0]                      # views taken once: a view per tie costs its
-    tloc = scr[1]                       # reference count
+    delta = scr[0]
+    tloc = scr[1]
     X = scr[2]
     nq = scr[3]
     e1 = scr[4]
@@ -199,7 +200,7 @@ def _quad_ties_range(lo, hi, x, v, ties, law, pf, pv, lever):
             pv[j, k] = _tie_dashpot(c, v[tie_node[j], k], vt)
 
 
-@njit(cache=True)
+@loop_kernel
 def _quad_ties_commit(x, ties, pf, pv, lever, f_c):
     """The serial end of the quad ties: forces of the traction (``pf``, with the frame's)
     and of the dashpot (``pv``) to the tied nodes and the targets' nodes (in tie order);
@@ -312,18 +313,18 @@ def cohesive_ties_beam(x, v, quat, ties, law, f_c):
     relative to ``P``'s (it only dissipates; it turns no frame).
     Returns the number of fully debonded ties.
     """
+    return _beam_ties(x, v, quat, ties, law, f_c, np.empty((10, 3)))
+
+
+@loop_kernel
+def _beam_ties(x, v, quat, ties, law, f_c, scr):
+    """:func:`cohesive_ties_beam` with its scratch ``scr`` (10, 3)."""
     tie_node, tie_seg, tie_s, tie_anchor = ties.tie_node, ties.tie_seg, ties.tie_s, ties.tie_anchor
     tie_arm, tie_axis, tie_area, tie_c = ties.tie_arm, ties.tie_axis, ties.tie_area, ties.tie_c
     seg, tie_D = ties.seg, ties.tie_D
     n = tie_node.shape[0]
-    R = np.empty((3, 3))
-    arm = np.empty(3)
-    nv = np.empty(3)
-    ax = np.empty(3)
-    tv = np.empty(3)
-    delta = np.empty(3)
-    tloc = np.empty(3)
-    p = np.empty(3)
+    R, arm, nv, ax, tv = scr[0:3], scr[3], scr[4], scr[5], scr[6]
+    delta, tloc, p = scr[7], scr[8], scr[9]
     failed = 0
     for j in range(n):
         e = tie_seg[j]

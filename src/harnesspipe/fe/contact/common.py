@@ -49,6 +49,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from harnesspipe.fe.loops import loop_kernel
 from harnesspipe.fe.vec3 import dot
 
 DEFAULT_MAXS = 8        # partner slots per owner of a slot history (grown by fit_slot_history)
@@ -90,7 +91,7 @@ def fit_slot_history(hist, owners):
     return np.pad(hp, pad[:2], constant_values=-1), np.pad(hf, pad)
 
 
-@njit(cache=True)
+@loop_kernel
 def share_node(conn, a, b):
     """Elements ``a`` and ``b`` of ``conn`` have a node in common (neighbours never contact)."""
     for i in range(conn.shape[1]):
@@ -100,7 +101,7 @@ def share_node(conn, a, b):
     return False
 
 
-@njit(cache=True)
+@loop_kernel
 def find_slot(hist_partner, conn, owner, partner):
     """Slot of ``partner`` in the owner's row, else of an element adjacent to it, else -1."""
     maxs = hist_partner.shape[1]
@@ -114,7 +115,7 @@ def find_slot(hist_partner, conn, owner, partner):
     return -1
 
 
-@njit(cache=True)
+@loop_kernel
 def free_slot(hist_partner, owner):
     """The first free history slot of ``owner`` (partner index < 0), -1 when all are taken."""
     for s in range(hist_partner.shape[1]):

@@ -17,6 +17,7 @@ from numba import njit, prange
 from harnesspipe.fe.contact.common import (CHUNK, REJECT_TOL, SERIAL_MAX_CHUNKS, find_slot,
                                            to_tangent_plane)
 from harnesspipe.fe.contact.surface import project_quad
+from harnesspipe.fe.loops import loop_kernel
 from harnesspipe.fe.materials.friction import rate_dependent_friction
 
 ENTRY_FRACTION = 0.05   # a contact begins at most this far (x (r + t/2)) inside the surface
@@ -103,10 +104,11 @@ def node_facet_contact(x, v, fset, dt, time_scale, f_n, f_t):
     pd = np.empty((n_pairs, 9))     # xi, eta, dist(signed), n(3) force direction, X(3)
     n_chunks = (n_pairs + CHUNK - 1) // CHUNK
     if n_chunks <= SERIAL_MAX_CHUNKS:
-        _nf_project(x, fset, t_max, 0, n_pairs, pd)
+        _nf_project(x, fset, t_max, 0, n_pairs, pd, np.zeros(8))
     else:
         for ch in prange(n_chunks):
-            _nf_project(x, fset, t_max, ch * CHUNK, min(n_pairs, (ch + 1) * CHUNK), pd)
+            _nf_project(x, fset, t_max, ch * CHUNK, min(n_pairs, (ch + 1) * CHUNK), pd,
+                        np.zeros(8))
     return _nf_commit(x, v, fset, pd, dt, dt * time_scale, f_n, f_t)
 
 
@@ -116,7 +118,7 @@ def node_facet_contact_serial(x, v, fset, dt, time_scale, f_n, f_t):
     work); the same steps, the same arithmetic, the same results."""
     n_pairs = fset.pairs.shape[0]
     pd = np.empty((n_pairs, 9))
-    _nf_project(x, fset, _t_max(fset.quad_t), 0, n_pairs, pd)
+    _nf_project(x, fset, _t_max(fset.quad_t), 0, n_pairs, pd, np.zeros(8))
     return _nf_commit(x, v, fset, pd, dt, dt * time_scale, f_n, f_t)
 
 
@@ -129,30 +131,46 @@ def _t_max(quad_t):
     return t_max
 
 
+class NodeGaps(NamedTuple):
+    """Each contact node's soft-minimum gap of one call (:func:`_nf_softmin`) and its
+    force, the work arrays of :func:`_nf_commit`."""
+    was_in: np.ndarray      # (n_cn,) bool: in contact at the previous step
+    h_min: np.ndarray       # (n_cn,) closest facet surface distance
+    dom: np.ndarray         # (n_cn,) int64 dominant (closest) pair, -1 for none
+    w_sum: np.ndarray       # (n_cn,) sum of the soft-minimum weights
+    n_sum: np.ndarray       # (n_cn, 3) weighted sum of the pairs' force directions
+    pn_w: np.ndarray        # (n_cn,) p_n / w_sum of each node in contact, else 0
+
+
 @njit(cache=True)
 def _nf_commit(x, v, fset, pd, dt, dt_phys, f_n, f_t):
     """The serial end of the node-facet contact, from the projections ``pd`` of the pairs
     of ``fset`` (:func:`_nf_project`): each node's soft-minimum gap, its forces (the
-    gradient of the penalty energy), friction on its dominant facet and its history."""
+    gradient of the penalty energy), friction on its dominant facet and its history.
+    Returns the number of active contacts."""
+    n_cn = fset.nodes.shape[0]
+    ng = NodeGaps(np.empty(n_cn, dtype=np.bool_), np.full(n_cn, np.inf),
+                  np.full(n_cn, -1, dtype=np.int64), np.zeros(n_cn), np.zeros((n_cn, 3)),
+                  np.zeros(n_cn))
+    _nf_softmin(fset, pd, ng)
+    return _nf_node_forces(x, v, fset, pd, dt, dt_phys, f_n, f_t, ng, np.empty((5, 3)),
+                           np.empty(4))
+
+
+@loop_kernel
+def _nf_node_forces(x, v, fset, pd, dt, dt_phys, f_n, f_t, ng, scr, N):
+    """:func:`_nf_commit`'s forces and history from the gaps ``ng`` (:class:`NodeGaps`);
+    scratch ``scr`` (5, 3), ``N`` (4,)."""
     nodes, node_r, quads, quad_t = fset.nodes, fset.node_r, fset.quads, fset.quad_t
     pairs = fset.pairs
     k_n, k_t, mu_s, mu_k, d_c = fset.k_n, fset.k_t, fset.mu_s, fset.mu_k, fset.d_c
     pen_max, hist_partner, hist_ft = fset.pen_max, fset.hist_partner, fset.hist_ft
+    was_in, h_min, dom, w_sum, n_sum, pn_w = ng
     n_cn = nodes.shape[0]
-    was_in = np.empty(n_cn, dtype=np.bool_)
-    for i in range(n_cn):
-        was_in[i] = hist_partner[i, 0] >= 0
-    h_min, dom, w_sum, n_sum = _nf_softmin(pairs, pd, quad_t, was_in)
-    pn_w = np.zeros(n_cn)        # p_n / (sum of the weights) of each node in contact
     # node by node: each row of the history is read (old slot) before it is rewritten, so
     # the history is updated in place (no copies)
     maxs = hist_partner.shape[1]
-    fold = np.empty(3)
-    dg = np.empty(3)
-    ds = np.empty(3)
-    hnew = np.empty(3)
-    nv = np.empty(3)
-    N = np.empty(4)
+    fold, dg, ds, hnew, nv = scr[0], scr[1], scr[2], scr[3], scr[4]
     n_active = 0
     for i in range(n_cn):
         p = dom[i]
@@ -211,16 +229,18 @@ def _nf_commit(x, v, fset, pd, dt, dt_phys, f_n, f_t):
     return n_active
 
 
-@njit(cache=True)
-def _nf_softmin(pairs, pd, quad_t, was_in):
+@loop_kernel
+def _nf_softmin(fset, pd, ng):
     """Each node's distances to its facets' surfaces h_p = dist_p - t_q / 2 reduced to the
-    soft minimum h_min - SOFTMIN_TAU ln(sum_p exp(-(h_p - h_min) / SOFTMIN_TAU)): returns
-    h_min, the dominant (closest) pair, the sum of the weights and the weighted sum of the
-    pairs' force directions.  A pair behind its facet counts only for a node that was in
-    contact at the previous step (``was_in``)."""
-    n_cn = was_in.shape[0]
-    h_min = np.full(n_cn, np.inf)
-    dom = np.full(n_cn, -1, dtype=np.int64)
+    soft minimum h_min - SOFTMIN_TAU ln(sum_p exp(-(h_p - h_min) / SOFTMIN_TAU)): into
+    ``ng`` (:class:`NodeGaps`, as allocated by :func:`_nf_commit`) h_min, the dominant
+    (closest) pair, the sum of the weights and the weighted sum of the pairs' force
+    directions.  A pair behind its facet counts only for a node that was in contact at the
+    previous step (``was_in``, set here from the history)."""
+    pairs, quad_t, hist_partner = fset.pairs, fset.quad_t, fset.hist_partner
+    was_in, h_min, dom, w_sum, n_sum = ng.was_in, ng.h_min, ng.dom, ng.w_sum, ng.n_sum
+    for i in range(was_in.shape[0]):
+        was_in[i] = hist_partner[i, 0] >= 0
     for p in range(pairs.shape[0]):
         i = pairs[p, 0]
         if _nf_counts(pd, was_in, i, p):
@@ -228,8 +248,6 @@ def _nf_softmin(pairs, pd, quad_t, was_in):
             if h < h_min[i]:
                 h_min[i] = h
                 dom[i] = p
-    w_sum = np.zeros(n_cn)
-    n_sum = np.zeros((n_cn, 3))
     for p in range(pairs.shape[0]):
         i = pairs[p, 0]
         w = _nf_weight(pd, quad_t, was_in, pairs, p, h_min[i])
@@ -238,7 +256,6 @@ def _nf_softmin(pairs, pd, quad_t, was_in):
         w_sum[i] += w
         for c in range(3):
             n_sum[i, c] += w * pd[p, 3 + c]
-    return h_min, dom, w_sum, n_sum
 
 
 @njit(cache=True, inline="always")
@@ -273,7 +290,7 @@ def _nf_reach(r, t_max, pen_max):
     return max(r + 0.5 * t_max + SOFTMIN_REACH * SOFTMIN_TAU, pen_max - r) * (1.0 + REJECT_TOL)
 
 
-@njit(cache=True)
+@loop_kernel
 def _node_quad_box_d2(x, nd, quads, q):
     """Squared distance of node ``nd`` from the bounding box of quad ``q``'s nodes."""
     d2 = 0.0
@@ -307,10 +324,10 @@ def near_node_facet_pairs(x, nodes, node_r, quads, quad_t, pairs, pen_max, margi
     return keep
 
 
-@njit(cache=True)
-def _nf_project(x, fset, t_max, p0, p1, pd):
+@loop_kernel
+def _nf_project(x, fset, t_max, p0, p1, pd, prj):
     """Closest points of the (node, quad) pairs p0..p1-1 of ``fset`` into pd (see
-    node_facet_contact).
+    node_facet_contact); ``prj`` (8,) scratch.
 
     Early reject: a pair whose node is farther from the bounding box of the quad's nodes
     (which holds the bilinear facet, so the box distance bounds |dist| from below) than
@@ -323,7 +340,6 @@ def _nf_project(x, fset, t_max, p0, p1, pd):
     """
     nodes, node_r, quads, quad_sign = fset.nodes, fset.node_r, fset.quads, fset.quad_sign
     pairs, pen_max = fset.pairs, fset.pen_max
-    prj = np.zeros(8)
     for p in range(p0, p1):
         i = pairs[p, 0]
         q = pairs[p, 1]

@@ -11,6 +11,7 @@ import math
 import numpy as np
 from numba import njit
 
+from harnesspipe.fe.loops import loop_kernel
 from harnesspipe.fe.vec3 import dot
 
 
@@ -59,7 +60,7 @@ def quad_point(x, quads, q, xi, eta):
     return X, n, e1
 
 
-@njit(cache=True)
+@loop_kernel
 def project_quad(x, quads, q, p, clamp, out):
     """Closest point parameters of point p on quad q by Gauss-Newton (at most 7 iterations).
 

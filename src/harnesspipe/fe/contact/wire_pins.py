@@ -12,6 +12,7 @@ import numpy as np
 from numba import njit, prange
 
 from harnesspipe.fe.contact.common import to_tangent_plane
+from harnesspipe.fe.loops import loop_kernel
 from harnesspipe.fe.materials.friction import coulomb_return_map
 from harnesspipe.fe.vec3 import dot
 
@@ -27,7 +28,7 @@ class WireChains(NamedTuple):
     hist_ft: np.ndarray     # (n_chains, n_cyl, 3) friction history, in place
 
 
-@njit(cache=True)
+@loop_kernel
 def _chain_closest(x, seg, seg_r, e0, e1, c0, ax, R):
     """Closest point of the segments e0..e1-1 of a chain to the axis line (point ``c0``,
     unit ``ax``): ``(gap, e, s)`` with gap = distance - R - r_e (smallest over the chain)."""
@@ -56,7 +57,7 @@ def _chain_closest(x, seg, seg_r, e0, e1, c0, ax, R):
     return best, e_best, s_best
 
 
-@njit(cache=True)
+@loop_kernel
 def _chain_pins(x, v, chains, w, cyl, dt, f_n, f_t, part, act, scr):
     """Chain ``w`` against every cylinder (:func:`chain_cylinder_contact`): forces on its
     nodes into ``f_n``, ``f_t``, on the cylinders into ``part[w]``, contacts into act[w];

@@ -18,6 +18,7 @@ from numba import njit
 
 from harnesspipe.fe.contact.common import REJECT_TOL, find_slot, free_slot, to_tangent_plane
 from harnesspipe.fe.contact.search import segment_closest_params
+from harnesspipe.fe.loops import loop_kernel
 from harnesspipe.fe.materials.friction import rate_dependent_friction
 from harnesspipe.fe.vec3 import any_perpendicular
 
@@ -273,8 +274,8 @@ def beam_beam_contact(x, v, wc, dt, time_scale, f_n, f_t):
     _ww_flags(x, wc, valence, flag, pts)
     # phase 2: forces and friction of the touching pairs only
     t = _touching_arrays(flag, pts)
-    _ww_forces(x, v, wc, t, dt, dt * time_scale)
-    _ww_commit(x, wc, t, f_n, f_t)
+    _ww_forces(x, v, wc, t, dt, dt * time_scale, np.zeros((5, 3)))
+    _ww_commit(x, wc, t, f_n, f_t, np.empty((9, 3)))
     return t.idx.size
 
 
@@ -304,18 +305,17 @@ def _touching(flag):
     return idx
 
 
-@njit(cache=True)
-def _ww_commit(x, wc, t, f_n, f_t):
+@loop_kernel
+def _ww_commit(x, wc, t, f_n, f_t, scr):
     """The serial end of the wire-wire contact: the new friction history of the touching
     pairs ``t`` (:class:`Touching`) replaces the old one, and their point forces go to the
-    segments' end nodes (in pair order)."""
+    segments' end nodes (in pair order).  ``scr`` (9, 3) scratch."""
     seg, pairs, hist_partner, hist_ft = wc.seg, wc.pairs, wc.hist_partner, wc.hist_ft
     idx, flag, pts, pfn, pft, hnew, pdu = t.idx, t.flag, t.pts, t.pfn, t.pft, t.hnew, t.pdu
     for i in range(hist_partner.shape[0]):
         for s in range(hist_partner.shape[1]):
             hist_partner[i, s] = -1
-    ea, eb = np.empty(3), np.empty(3)    # :func:`_overlap_forces`' scratch, once per call
-    g_ov, g = np.empty((4, 3)), np.empty((3, 3))
+    ea, eb, g_ov, g = scr[0], scr[1], scr[2:6], scr[6:9]     # :func:`_overlap_forces`' scratch
     for j in range(idx.size):
         p = idx[j]
         a = pairs[p, 0]
@@ -393,7 +393,7 @@ def _segments_apart(x, a0, a1, b0, b1, r):
     return d2 > (r * (1.0 + REJECT_TOL)) ** 2
 
 
-@njit(cache=True)
+@loop_kernel
 def _ww_flags(x, wc, valence, flag, pts):
     """flag[p] for every pair p of ``wc`` (:class:`WireContact`): bit k set if contact
     point k of the pair penetrates; for a pair with a flag, its points
@@ -432,21 +432,18 @@ def _ww_flags(x, wc, valence, flag, pts):
         flag[p] = f
 
 
-@njit(cache=True)
-def _ww_forces(x, v, wc, t, dt, dt_phys):
+@loop_kernel
+def _ww_forces(x, v, wc, t, dt, dt_phys, scr):
     """Normal and friction forces of the touching pairs ``t.idx`` (:class:`Touching`,
     compact arrays by j) at their points ``t.pts`` (:func:`_ww_flags`); ``pdu[j, 0]``:
     (U_par - U_cross) beta' for :func:`_blend_forces`, ``pdu[j, 1]``: beta U_par / w, the
-    parallel energy per unit weight, for :func:`_overlap_forces`."""
+    parallel energy per unit weight, for :func:`_overlap_forces`.  ``scr`` (5, 3) zeroed
+    scratch."""
     seg, seg_r, pairs = wc.seg, wc.seg_r, wc.pairs
     hist_partner, hist_ft = wc.hist_partner, wc.hist_ft
     k_n, k_t, mu_s, mu_k, d_c = wc.k_n, wc.k_t, wc.mu_s, wc.mu_k, wc.d_c
     idx, flag, pts, pfn, pft, hnew, pdu = t.idx, t.flag, t.pts, t.pfn, t.pft, t.hnew, t.pdu
-    fold = np.zeros(3)               # scratch taken once: a view per pair costs its
-    dg = np.zeros(3)                 # reference count
-    ds = np.zeros(3)
-    nv = np.zeros(3)
-    fnew = np.zeros(3)
+    fold, dg, ds, nv, fnew = scr[0], scr[1], scr[2], scr[3], scr[4]
     for j in range(idx.size):
         p = idx[j]
         for k in range(WW_POINTS):

@@ -36,6 +36,7 @@ from numba import njit, prange
 
 from harnesspipe.fe.elements.beam import (FibreHistory, FibreMaterial, FibreSection, beam_work,
                                           element_response)
+from harnesspipe.fe.loops import loop_kernel
 from harnesspipe.fe.materials.hardening import positive_pow, return_map_from
 from harnesspipe.fe.rotation import log_matrix, ts_inverse_coeff
 
@@ -360,7 +361,12 @@ def beam_range_forces(lo, hi, beams, x, quat):
     :func:`beam_forces`).  The rotation matrix of a node shared with the previous
     element of a chain (``conn[e, 0] == conn[e - 1, 1]``) is reused, not rebuilt from
     its quaternion; scratch is allocated once per call."""
-    work = beam_scratch()
+    _beam_loop(lo, hi, beams, x, quat, beam_scratch())
+
+
+@loop_kernel
+def _beam_loop(lo, hi, beams, x, quat, work):
+    """:func:`beam_range_forces` with its scratch ``work`` (:class:`BeamScratch`)."""
     conn = beams.conn
     last = -1                       # node whose matrix is in Rg[1 - ia]
     ia = 0                          # Rg[ia] holds node a, Rg[1 - ia] node b

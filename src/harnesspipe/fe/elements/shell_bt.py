@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from harnesspipe.fe.loops import loop_kernel
 from harnesspipe.fe.materials.tube_wall import W_KE, W_KH, W_KS
 
 from harnesspipe.fe.elements.shell_bt_element import (  # noqa: F401 -- layout re-exported
@@ -33,10 +34,14 @@ PARALLEL_MIN = 128   # below this many elements shell_forces runs the serial ker
 def shell_range_forces(lo, hi, x, v, conn, thick, mat, state, dt, f_el, hg):
     """Element forces of elements ``lo..hi-1`` into ``f_el`` (arguments as
     :func:`shell_element_forces`); scratch is allocated once per call."""
-    ef, loc, Dm, Dj, eps, sig, st_new, w4, w44 = work_arrays()
+    _element_loop(lo, hi, x, v, conn, thick, mat, state, dt, f_el, hg, work_arrays())
+
+
+@loop_kernel
+def _element_loop(lo, hi, x, v, conn, thick, mat, state, dt, f_el, hg, work):
+    """:func:`shell_range_forces` with its scratch ``work`` (a :class:`Work`)."""
     for e in range(lo, hi):
-        element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, ef, loc, Dm, Dj, eps, sig,
-                       st_new, w4, w44)
+        element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, work)
 
 
 @njit(cache=True, parallel=True)

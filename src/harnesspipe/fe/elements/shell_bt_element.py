@@ -56,8 +56,7 @@ L_GAMMA = 9                     # Belytschko-Tsay hourglass vector
 
 
 class Work(NamedTuple):
-    """Scratch of :func:`element_forces`, made once per element loop (or parallel chunk)
-    and passed on as separate arrays."""
+    """Scratch of :func:`element_forces`, made once per element loop (or parallel chunk)."""
     ef: np.ndarray          # (3, 3) co-rotational frame, rows e1, e2, e3
     loc: np.ndarray         # (10, 4) local nodal data, rows L_*
     Dm: np.ndarray          # (3, 3) orthotropic plane-stress stiffness
@@ -371,14 +370,14 @@ def _nodal_forces(e, f_el, ef, loc, area, N, M, Q, H):
 
 
 @njit(cache=True, inline="always")
-def element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, ef, loc, Dm, Dj, eps, sig,
-                   st_new, w4, w44):
+def element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, work):
     """Stress update over ``dt`` and nodal forces of element ``e``: writes ``f_el[e]``
     (4, 6), updates ``state[e]`` (N_STATE,).  ``x`` (n_nodes, 3) positions, ``v``
     (n_nodes, 6) half-step velocities, ``conn`` (n_el, 4), ``thick`` (n_el,) initial
     thicknesses, ``mat`` (n_el, 5 or more) material rows, ``hg`` the hourglass coefficient;
-    scratch ``ef .. w44`` the fields of a :class:`Work` (separate arrays: a tuple passed
-    into the element loop costs reference counting per element)."""
+    ``work`` the scratch (:class:`Work`).  Inlined into a loop kernel
+    (:mod:`harnesspipe.fe.loops`): its arrays and views are not reference-counted."""
+    ef, loc, Dm, Dj, eps, sig, st_new, w4, w44 = work
     _local_nodes(e, x, v, conn, ef, loc)
     area, bb = _centroid_gradient(loc)
     d_m, kappa, g_rate = _velocity_strains(loc)
