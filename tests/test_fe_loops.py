@@ -9,7 +9,8 @@ import pytest
 from numba import njit
 from numba.core.errors import TypingError
 
-from harnesspipe.fe.contact import cohesive_ties, common, node_facet, surface, wire_pins, wire_wire
+from harnesspipe.fe.contact import (cohesive_ties, common, facet_pins, node_facet, surface, wire_pins,
+                                    wire_wire)
 from harnesspipe.fe.elements import beam_explicit, shell_bt
 from harnesspipe.fe.loops import loop_kernel
 from harnesspipe.fe.rotation import quat_to_matrix
@@ -67,7 +68,8 @@ def test_loop_kernel_refuses_an_allocation():
     shell_bt._element_loop, beam_explicit._beam_loop, wire_wire._ww_flags, wire_wire._ww_forces,
     wire_wire._ww_commit, node_facet._nf_project, node_facet._nf_softmin,
     node_facet._nf_node_forces, cohesive_ties._quad_ties_range, cohesive_ties._quad_ties_commit,
-    cohesive_ties._beam_ties, wire_pins._chain_pins, surface.project_quad, common.find_slot,
+    cohesive_ties._beam_ties, wire_pins._chain_pins, facet_pins._facet_pins, facet_pins._facets_near,
+    facet_pins._quad_axis_closest, facet_pins._patches, surface.project_quad, common.find_slot,
     common.free_slot, quat_to_matrix])
 def test_the_lanes_loops_are_loop_kernels(kernel):
     assert kernel.targetoptions.get("_nrt") is False, kernel.py_func.__qualname__

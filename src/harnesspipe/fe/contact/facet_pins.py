@@ -13,6 +13,7 @@ from numba import njit
 
 from harnesspipe.fe.contact.common import share_node, to_tangent_plane
 from harnesspipe.fe.contact.surface import quad_tangents
+from harnesspipe.fe.loops import loop_kernel
 from harnesspipe.fe.materials.friction import coulomb_return_map
 from harnesspipe.fe.vec3 import dot
 
@@ -33,8 +34,8 @@ class PinFacetSet(NamedTuple):
     hist_ft: np.ndarray     # (n_cyl, maxs, 3) their friction forces, in place
 
 
-@njit(cache=True)
-def _quad_axis_closest(x, quads, q, c0, ax, out):
+@loop_kernel
+def _quad_axis_closest(x, quads, q, c0, ax, out, scr):
     """Point of the bilinear quad ``q`` closest to the axis line (point ``c0``, unit ``ax``).
 
     Minimises f = 1/2 |P (X(xi, eta) - c0)|^2, P = I - ax ax^T, over [-1, 1]^2 by projected
@@ -43,13 +44,12 @@ def _quad_axis_closest(x, quads, q, c0, ax, out):
     (a facet parallel to the pin) has a line of minimisers; the Levenberg term
     ``LM_DAMP trace`` keeps the iterate at the point of that line nearest the previous
     iterate (the quad's centre line), with no effect on the distance.
-    Writes out = (xi, eta, dist, n(3)), n the unit radial vector from the axis.
+    Writes out = (xi, eta, dist, n(3)), n the unit radial vector from the axis; ``scr``
+    (3, 3) scratch.
     """
     xi = 0.0
     eta = 0.0
-    X = np.empty(3)
-    tx = np.empty(3)
-    te = np.empty(3)
+    X, tx, te = scr[0], scr[1], scr[2]
     for it in range(12):
         quad_tangents(x, quads, q, xi, eta, X, tx, te)
         rl = (X[0] - c0[0]) * ax[0] + (X[1] - c0[1]) * ax[1] + (X[2] - c0[2]) * ax[2]
@@ -96,16 +96,17 @@ def _quad_axis_closest(x, quads, q, c0, ax, out):
         out[3 + k] = X[k] / dist if dist > 0.0 else 0.0
 
 
-@njit(cache=True)
-def _facets_near(x, quads, quad_t, c0, ax, R, cand, prj_all):
+@loop_kernel
+def _facets_near(x, quads, quad_t, c0, ax, R, work):
     """Quads of the set whose face comes within ``PATCH_REACH R`` of the cylinder
     (c0, ax, R) (gap = distance of the mid-surface to the axis - R - t/2 < PATCH_REACH R),
     the axis not on the mid-surface itself: their ids into
-    ``cand``, their closest points (:func:`_quad_axis_closest`) into ``prj_all[:, :6]`` and
-    gaps into ``prj_all[:, 6]``; returns their number.  A quad whose bounding sphere stays
-    farther is not projected."""
+    ``work.cand``, their closest points (:func:`_quad_axis_closest`) into
+    ``work.prj_all[:, :6]`` and gaps into ``work.prj_all[:, 6]`` (``work``:
+    :class:`PatchWork`); returns their number.  A quad whose bounding sphere stays farther
+    is not projected."""
+    cand, prj_all, prj, scr = work.cand, work.prj_all, work.prj, work.vec[:3]
     m = 0
-    prj = np.empty(6)
     for q in range(quads.shape[0]):
         cx = 0.25 * (x[quads[q, 0], 0] + x[quads[q, 1], 0] + x[quads[q, 2], 0] + x[quads[q, 3], 0])
         cy = 0.25 * (x[quads[q, 0], 1] + x[quads[q, 1], 1] + x[quads[q, 2], 1] + x[quads[q, 3], 1])
@@ -122,7 +123,7 @@ def _facets_near(x, quads, quad_t, c0, ax, R, cand, prj_all):
         reach = (1.0 + PATCH_REACH) * R + 0.5 * quad_t[q]
         if math.sqrt(r0 * r0 + r1 * r1 + r2 * r2) - math.sqrt(rho2) >= reach:
             continue
-        _quad_axis_closest(x, quads, q, c0, ax, prj)
+        _quad_axis_closest(x, quads, q, c0, ax, prj, scr)
         gap = prj[2] - R - 0.5 * quad_t[q]
         if gap < PATCH_REACH * R and prj[2] > 0.0:
             cand[m] = q
@@ -133,14 +134,14 @@ def _facets_near(x, quads, quad_t, c0, ax, R, cand, prj_all):
     return m
 
 
-@njit(cache=True)
-def _patches(quads, cand, m, patch):
-    """Connected patches of the quads cand[:m] near a pin (quads sharing a node): patch id
-    per quad into ``patch``; returns the number of patches."""
+@loop_kernel
+def _patches(quads, m, work):
+    """Connected patches of the quads ``work.cand[:m]`` near a pin (quads sharing a node):
+    patch id per quad into ``work.patch``; returns the number of patches."""
+    cand, patch, stack = work.cand, work.patch, work.stack
     for i in range(m):
         patch[i] = -1
     n_p = 0
-    stack = np.empty(m, dtype=np.int64)
     for i in range(m):
         if patch[i] >= 0:
             continue
@@ -167,7 +168,7 @@ def _bilinear(xi, eta, a):
     return 0.25 * (1.0 + sx * xi) * (1.0 + se * eta)
 
 
-@njit(cache=True)
+@loop_kernel
 def _patch_contact(prj_all, patch, m, p, weight):
     """Soft minimum of the gaps of patch ``p``'s quads (LogSumExp, width SOFTMIN_TAU):
     ``G = g_min - tau ln sum_q exp(-(g_q - g_min) / tau)``, smooth in the nodes, below
@@ -192,25 +193,38 @@ def _patch_contact(prj_all, patch, m, p, weight):
     return g_min - SOFTMIN_TAU * math.log(total), i_dom
 
 
+class PatchWork(NamedTuple):
+    """Work arrays of the pin-facet kernels for a set of ``n_q`` quads (:func:`patch_work`)."""
+    cand: np.ndarray        # (n_q,) int64 ids of the quads near a pin (:func:`_facets_near`)
+    prj_all: np.ndarray     # (n_q, 7) their closest points (xi, eta, dist, n) and gaps
+    patch: np.ndarray       # (n_q,) int64 their patch ids (:func:`_patches`)
+    weight: np.ndarray      # (n_q,) soft-minimum weights (:func:`_patch_contact`)
+    stack: np.ndarray       # (n_q,) int64 (:func:`_patches`)
+    prj: np.ndarray         # (6,) one quad's closest point
+    vec: np.ndarray         # (8, 3) a projection's X, X_xi, X_eta; then nv, dg, fold, fnew, ds
+    slot_q: np.ndarray      # (maxs,) int64 the previous step's history of one cylinder
+    slot_f: np.ndarray      # (maxs, 3)
+
+
 @njit(cache=True)
-def _patch_scratch(n_q):
-    """Work arrays of the pin-facet kernels for a set of ``n_q`` quads: candidate ids,
-    their closest points and gaps (:func:`_facets_near`), patch ids and soft-minimum
-    weights."""
-    return (np.empty(n_q, dtype=np.int64), np.empty((n_q, 7)), np.empty(n_q, dtype=np.int64),
-            np.empty(n_q))
+def patch_work(n_q, maxs):
+    """A :class:`PatchWork` for ``n_q`` quads and ``maxs`` history slots."""
+    i8 = np.int64
+    return PatchWork(np.empty(n_q, dtype=i8), np.empty((n_q, 7)), np.empty(n_q, dtype=i8),
+                     np.empty(n_q), np.empty(n_q, dtype=i8), np.empty(6), np.empty((8, 3)),
+                     np.empty(maxs, dtype=i8), np.empty((maxs, 3)))
 
 
 @njit(cache=True)
 def facets_cylinder_gaps(x, quads, quad_t, cyl_c, cyl_axis, cyl_R):
     """Smallest patch gap G (:func:`facets_cylinder_contact`) of the set at each cylinder
     (np.inf where no quad is near): negative where a pin starts inside the soft minimum."""
-    cand, prj_all, patch, weight = _patch_scratch(quads.shape[0])
+    work = patch_work(quads.shape[0], 0)
     gaps = np.full(cyl_c.shape[0], np.inf)
     for c in range(cyl_c.shape[0]):
-        m = _facets_near(x, quads, quad_t, cyl_c[c], cyl_axis[c], cyl_R[c], cand, prj_all)
-        for p in range(_patches(quads, cand, m, patch)):
-            gaps[c] = min(gaps[c], _patch_contact(prj_all, patch, m, p, weight)[0])
+        m = _facets_near(x, quads, quad_t, cyl_c[c], cyl_axis[c], cyl_R[c], work)
+        for p in range(_patches(quads, m, work)):
+            gaps[c] = min(gaps[c], _patch_contact(work.prj_all, work.patch, m, p, work.weight)[0])
     return gaps
 
 
@@ -256,23 +270,25 @@ def facets_cylinder_contact(x, v, fset, cyl, dt, f_n, f_t, f_cyl):
     ``f_cyl`` (n_cyl, 3): force ON each cylinder, ADDED.  Returns the number of active
     (patch, cylinder) contacts.
     """
+    work = patch_work(fset.quads.shape[0], fset.hist_q.shape[1])
+    return _facet_pins(x, v, fset, cyl, dt, f_n, f_t, f_cyl, work)
+
+
+@loop_kernel
+def _facet_pins(x, v, fset, cyl, dt, f_n, f_t, f_cyl, work):
+    """:func:`facets_cylinder_contact` with its work arrays (:class:`PatchWork`)."""
     quads, quad_t, mu, cyl_slack = fset.quads, fset.quad_t, fset.mu, fset.slack
     k_n, k_t, hist_q, hist_ft = fset.k_n, fset.k_t, fset.hist_q, fset.hist_ft
     cyl_c, cyl_axis, cyl_R, cyl_v = cyl.centres, cyl.axes, cyl.radii, cyl.velocity
     n_cyl = cyl_c.shape[0]
     maxs = hist_q.shape[1]
-    cand, prj_all, patch, weight = _patch_scratch(quads.shape[0])
-    slot_q = np.empty(maxs, dtype=np.int64)
-    slot_f = np.empty((maxs, 3))
-    nv = np.empty(3)
-    dg = np.empty(3)
-    fold = np.empty(3)
-    fnew = np.empty(3)
-    ds = np.empty(3)
+    cand, prj_all, weight = work.cand, work.prj_all, work.weight
+    patch, slot_q, slot_f = work.patch, work.slot_q, work.slot_f
+    nv, dg, fold, fnew, ds = work.vec[3], work.vec[4], work.vec[5], work.vec[6], work.vec[7]
     n_active = 0
     for c in range(n_cyl):
-        m = _facets_near(x, quads, quad_t, cyl_c[c], cyl_axis[c], cyl_R[c], cand, prj_all)
-        n_p = _patches(quads, cand, m, patch)
+        m = _facets_near(x, quads, quad_t, cyl_c[c], cyl_axis[c], cyl_R[c], work)
+        n_p = _patches(quads, m, work)
         for s in range(maxs):
             slot_q[s] = hist_q[c, s]
             hist_q[c, s] = -1
@@ -312,7 +328,7 @@ def facets_cylinder_contact(x, v, fset, cyl, dt, f_n, f_t, f_cyl):
     return n_active
 
 
-@njit(cache=True)
+@loop_kernel
 def _patch_history(slot_q, slot_f, cand, weight, m, fold):
     """Committed friction force of a patch: that of the first previous slot whose quad is in
     the patch (weight > 0), else zero (``fold`` written)."""
@@ -326,7 +342,7 @@ def _patch_history(slot_q, slot_f, cand, weight, m, fold):
                 return
 
 
-@njit(cache=True)
+@loop_kernel
 def _patch_normal(v, quads, cand, prj_all, weight, m, pn, f_n, f_cyl, nv, vel):
     """Normal force of one patch contact (:func:`facets_cylinder_contact`): pn pi_q n_q
     N_a(xi_q) onto the nodes, minus its sum onto the cylinder ``f_cyl`` (3,); writes the
