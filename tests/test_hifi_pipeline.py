@@ -603,10 +603,40 @@ def test_cohesive_cases_side_by_side_match_serial(tmp_path, fake):
         assert summary["pid"] != os.getpid()       # the best point's run came from a worker
 
 
+def test_core_share():
+    assert [hifi_chain.core_share(2, n, 8) for n in (0, 1, 2, 3)] == [2, 2, 1, 1]
+    assert hifi_chain.core_share(8, 2, 3) == 3          # no more than Numba's threads
+    assert hifi_chain.core_share(6, 4, 8) == 1
+
+
+def test_a_run_left_alone_takes_the_pools_cores(monkeypatch):
+    """A case worker's run counts itself among the pool's runs in progress and, at each
+    history row, takes its share of the cores: both once its partner is done, one while
+    another run goes on; back to one thread when it ends."""
+    import multiprocessing
+
+    import numba
+    running = multiprocessing.Value("i", 0)
+    monkeypatch.setattr(hifi_chain, "_CORES", (running, 2))
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        with hifi_chain._shared_cores() as share:
+            assert running.value == 1
+            share(step=1)
+            assert numba.get_num_threads() == min(2, numba.config.NUMBA_NUM_THREADS)
+            running.value += 1                       # a partner's run starts
+            share(step=2)
+            assert numba.get_num_threads() == 1
+        assert running.value == 1 and numba.get_num_threads() == 1
+    finally:
+        numba.set_num_threads(before)
+
+
 POOL_OWNER = """
 import os, sys, time
 from harnesspipe.stages import hifi_chain
-with hifi_chain._case_pool(2) as pool:
+with hifi_chain._case_pool(2, 2) as pool:
     pids = {pool.submit(os.getpid).result() for _ in range(8)}
     print(*sorted(pids), flush=True)
     time.sleep(600)

@@ -293,7 +293,8 @@ def three_point(inp: HifiInputs, n_shapes: int = 4, settings: DynamicsSettings |
         "energy_error": res.energy_error,
         "n_beam_elements": int(mesh.beam_conn.shape[0]), "n_shell_elements": int(mesh.shell_conn.shape[0]),
         "n_nodes": int(mesh.n_nodes), "n_ties": system.n_ties(),
-        "contact_pairs_max": int(system.pairs_max), "contact_searches": system.searches, "threads": numba.get_num_threads(),
+        "contact_pairs_max": int(system.pairs_max), "contact_searches": system.searches,
+        "threads": numba.get_num_threads(),     # at the end (a chain's run may change it: hifi_chain)
         "energies": {k: float(hist[k].iloc[-1]) for k in (*FAMILIES, "KE", "W_ext", "plastic")},
         "debonded_ties": system.debonded(),
         "tie_separation_max_mm": system.tie_separation_max(),

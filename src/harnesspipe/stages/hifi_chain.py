@@ -68,10 +68,13 @@ def model_config(settings: dict, interface: dict) -> dict:
 
 
 def default_runner(cfg: dict, case: str, overrides: dict, table2: Path | None):
-    """The real hi-fi model: :func:`harnesspipe.models.hifi.three_point`."""
+    """The real hi-fi model: :func:`harnesspipe.models.hifi.three_point` (in a case worker,
+    on the cores the pool's other runs leave it: :func:`_shared_cores`)."""
     from harnesspipe.models.hifi import three_point
     from harnesspipe.stages.hifi import inputs
-    return three_point(inputs(cfg, case, {k: str(v) for k, v in overrides.items()}, table2))
+    inp = inputs(cfg, case, {k: str(v) for k, v in overrides.items()}, table2)
+    with _shared_cores() as progress:
+        return three_point(inp, progress=progress)
 
 
 def run_key(model: dict, interface: dict, overrides: dict, table2: Path | None) -> str:
@@ -256,7 +259,7 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
                        earlier={c: [Path(p).parent / c for p in priors] for c in cases})
     rejected_live = live / "rejected.jsonl"
     _live_rejected(rejected_live, key)
-    with _case_pool(min(workers, len(cases))) as pool:
+    with _case_pool(min(workers, len(cases)), workers) as pool:
         objective = hcal.HifiObjective(simulate, targets, fixed, names, rejected_log=rejected_live, key=key,
                                        pool=pool, on_run=lambda c, p, run: runs.update({(c, _pkey(p)): run}))
         t0 = time.perf_counter()
@@ -375,24 +378,68 @@ def _exit_with(parent_pid: int) -> None:
     os._exit(1)
 
 
-def _case_worker_init(parent_pid: int) -> None:
-    """Initializer of a case worker: one Numba thread, and exit with the parent."""
+_CORES = None   # in a case worker: (the pool's count of runs in progress, the pool's cores)
+
+
+def _case_worker_init(parent_pid: int, running, cores: int) -> None:
+    """Initializer of a case worker: one Numba thread, the pool's shared count of runs in
+    progress (:func:`_shared_cores`), and exit with the parent."""
     import numba
+    global _CORES
     numba.set_num_threads(1)
+    _CORES = (running, cores)
     threading.Thread(target=_exit_with, args=(parent_pid,), daemon=True).start()
 
 
+def core_share(cores: int, running: int, most: int) -> int:
+    """Numba threads of one of ``running`` runs sharing ``cores``: an equal share, at least
+    one, at most ``most`` (the threads Numba has)."""
+    return max(1, min(most, cores // max(running, 1)))
+
+
 @contextlib.contextmanager
-def _case_pool(workers: int):
-    """A pool of ``workers`` fresh processes of one Numba thread each (none for one worker).
-    Fresh (spawned) processes: no OpenMP state inherited through a fork.  The workers end
-    when the process that made the pool ends, however it ends (:func:`_exit_with`)."""
+def _shared_cores():
+    """In a case worker, count this run among the pool's runs in progress and yield the
+    ``progress`` callback of :func:`harnesspipe.models.hifi.three_point` that, at every
+    history row, sets this process's Numba threads to its share of the pool's cores
+    (:func:`core_share`): a run left alone, its partner done, takes both cores.  A run's
+    result does not depend on its thread count (tests/test_hifi_threads.py).  Elsewhere
+    yields None."""
+    if _CORES is None:
+        yield None
+        return
+    import numba
+    running, cores = _CORES
+    most = numba.config.NUMBA_NUM_THREADS
+
+    def share(**_):
+        n = core_share(cores, running.value, most)
+        if n != numba.get_num_threads():
+            numba.set_num_threads(n)
+
+    with running.get_lock():
+        running.value += 1
+    try:
+        yield share
+    finally:
+        with running.get_lock():
+            running.value -= 1
+        numba.set_num_threads(1)
+
+
+@contextlib.contextmanager
+def _case_pool(workers: int, cores: int):
+    """A pool of ``workers`` fresh processes of one Numba thread each (none for one worker),
+    sharing ``cores`` (:func:`_shared_cores`).  Fresh (spawned) processes: no OpenMP state
+    inherited through a fork.  The workers end when the process that made the pool ends,
+    however it ends (:func:`_exit_with`)."""
     if workers < 2:
         yield None
         return
     ctx = multiprocessing.get_context("spawn")
+    running = ctx.Value("i", 0)
     with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_case_worker_init,
-                             initargs=(os.getpid(),)) as pool:
+                             initargs=(os.getpid(), running, cores)) as pool:
         yield pool
 
 
