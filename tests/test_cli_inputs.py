@@ -137,6 +137,30 @@ def test_interrupt_exits_130_with_one_line(monkeypatch, capsys):
     assert capsys.readouterr().err.strip() == "harnesspipe: interrupted"
 
 
+@pytest.mark.parametrize("args, key", [
+    (["hifi-fit", "--step", "mu_rtb", "--reference", "cwb19_t2_closed=x.h5"], "names"),
+    (["rom-fit", "--case", "cwb19_t2_closed", "--reference", "x.h5"], "reference"),
+])
+def test_stage_settings_without_a_key_exit_2_naming_it(tmp_path, capsys, args, key):
+    """A stage step's --settings is valid JSON but lacks a key the step reads: one line
+    naming the step and the key, exit 2, and no output folder left behind."""
+    out = tmp_path / "out"
+    assert cli.main(["stage", *args, "--settings", '{"unrelated": 1}', "--outdir", str(out)]) == 2
+    assert _one_error_line(capsys.readouterr().err) == (
+        f"harnesspipe: error: stage {args[0]}: --settings has no key {key!r} (the rule builds it "
+        "from config/config.yaml)")
+    assert not out.exists()
+
+
+def test_a_key_error_inside_a_step_is_not_blamed_on_the_settings(monkeypatch):
+    def broken(args):
+        return {}["unrelated"]          # a key the settings do have: a bug, not bad input
+    monkeypatch.setattr("harnesspipe.commands.stage._rom_fit", broken)
+    with pytest.raises(KeyError):
+        cli.main(["stage", "rom-fit", "--case", "c", "--reference", "x.h5",
+                  "--settings", '{"unrelated": 1}', "--outdir", "o"])
+
+
 # --------------------------------------------------------------------------- --interface
 
 def test_interface_paper_start_and_file(tmp_path):

@@ -20,6 +20,31 @@ def _settings(text: str) -> dict:
     return value
 
 
+def _has_key(value, key: str) -> bool:
+    """``key`` is a key of the JSON object ``value`` or of an object inside it."""
+    if isinstance(value, dict):
+        return key in value or any(_has_key(v, key) for v in value.values())
+    if isinstance(value, list):
+        return any(_has_key(v, key) for v in value)
+    return False
+
+
+def _named_keys(func):
+    """The step ``func``, with a key missing from its ``--settings`` reported as bad input
+    (exit 2, naming the key) instead of a traceback."""
+    def step(args):
+        try:
+            return func(args)
+        except KeyError as exc:
+            key = exc.args[0] if exc.args else None
+            settings = getattr(args, "settings", None)
+            if settings is None or not isinstance(key, str) or _has_key(settings, key):
+                raise
+            from harnesspipe.cli import InputError
+            raise InputError(f"stage {args.stage_command}: --settings has no key {key!r} (the "
+                             "rule builds it from config/config.yaml)") from None
+    return step
+
 
 def _collector(ssub, name: str, text: str, func) -> None:
     """A subcommand that collects fit.json files (``--fits``) into one table (``--out``)."""
@@ -106,8 +131,8 @@ def register(sub) -> None:
     p.add_argument("--prior", type=Path, nargs="*", default=[], help="fit.json of the earlier steps")
     p.add_argument("--cores", type=int, default=1,
                    help="cores of the step: the cases of one evaluation run side by side in "
-                        "min(cores, cases) one-thread processes; a single case runs on the "
-                        "NUMBA_NUM_THREADS threads")
+                        "min(cores, cases) processes sharing the cores (a run left alone takes "
+                        "them all); a single case runs on the NUMBA_NUM_THREADS threads")
     p.add_argument("--outdir", type=Path, required=True)
     p.set_defaults(func=_hifi_fit)
 
@@ -120,6 +145,9 @@ def register(sub) -> None:
     p.add_argument("--outdir", type=Path, required=True)
     p.add_argument("--label", default="hi-fi (paper's parameters)", help="legend of the hi-fi curve")
     p.set_defaults(func=_hifi_rom)
+
+    for p in ssub.choices.values():
+        p.set_defaults(func=_named_keys(p.get_default("func")))
 
 
 def _warmup(args) -> int:

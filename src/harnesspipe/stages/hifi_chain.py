@@ -241,12 +241,12 @@ def fit_step(step: str, settings: dict, references: dict[str, Path], outdir: Pat
     from harnesspipe.report import plots
     from harnesspipe.stages.data import read_prepared
     outdir = Path(outdir)
-    live = outdir / "replay"
-    live.mkdir(parents=True, exist_ok=True)
     names, cases = list(settings["names"]), list(settings["cases"])
     fixed, prior_ids = _start_values(step, settings, priors)
     refs = {c: read_prepared(references[c]) for c in cases}
     window = tuple(float(w) for w in settings["window"])
+    live = outdir / "replay"
+    live.mkdir(parents=True, exist_ok=True)
     targets = [(c, refs[c].grid, refs[c].mean, window) for c in cases]
     coverings_text = Path(table2).read_text() if table2 else "paper"
     key = objective_key(np.concatenate([refs[c].grid for c in cases]),
