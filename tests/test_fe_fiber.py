@@ -85,7 +85,7 @@ def test_section_tangent_matches_finite_difference():
         assert np.allclose(D[:, j], (sp - sm) / (2 * h), rtol=1e-5, atol=1e-6 * np.abs(D).max())
 
 
-@pytest.mark.parametrize("n", [0.12, 0.3, 1.0, 1.5, 2.0])
+@pytest.mark.parametrize("n", [0.12, 0.3, 0.9, 1.0, 1.5, 2.0])
 @pytest.mark.parametrize("alpha_old", [0.0, 1e-9, 1e-3, 0.2])
 def test_return_map_solves_eq2_and_gives_the_slope(n, alpha_old):
     from harnesspipe.fe.materials.hardening import hardening_slope, return_map

