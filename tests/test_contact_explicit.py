@@ -956,6 +956,31 @@ def test_damaged_ties_are_conservative_when_closing_differs_from_opening():
 
 
 # ------------------------------------------------------------- early rejects (candidates)
+def test_plane_gap_bounds_the_distance_from_a_warped_facet():
+    """_node_quad_plane_gap never exceeds a point's distance from the bilinear facet
+    (sampled densely), for warped facets; on a flat facet it is the distance from its plane,
+    so a point over the facet's interior gets its exact distance."""
+    from harnesspipe.fe.contact.node_facet import _node_quad_plane_gap
+    rng = np.random.default_rng(3)
+    g = np.linspace(-1.0, 1.0, 161)
+    xi, eta = [a.ravel() for a in np.meshgrid(g, g)]
+    shape = 0.25 * np.c_[(1 - xi) * (1 - eta), (1 + xi) * (1 - eta), (1 + xi) * (1 + eta),
+                         (1 - xi) * (1 + eta)]
+    quads = np.array([[0, 1, 2, 3]])
+    for warp in (0.0, 0.3, 1.0):
+        for _ in range(20):
+            corners = np.array([[0.0, 0, 0], [2, 0, 0], [2, 1.5, 0], [0, 1.5, 0]])
+            corners += rng.normal(scale=0.2, size=(4, 3))
+            corners[[0, 2], 2] += warp
+            p = rng.normal(scale=2.0, size=3) + [1.0, 0.75, 0.0]
+            x = np.vstack([corners, p])
+            dist = np.linalg.norm(shape @ corners - p, axis=1).min()
+            gap = _node_quad_plane_gap(x, 4, quads, 0)
+            assert gap <= dist + 1e-12
+    flat = np.array([[0.0, 0, 0], [2, 0, 0], [2, 1.5, 0], [0, 1.5, 0], [0.7, 0.4, -1.3]])
+    assert _node_quad_plane_gap(flat, 4, quads, 0) == pytest.approx(1.3, rel=1e-14)
+
+
 def test_far_candidates_change_nothing():
     """All-pairs candidate lists (mostly far apart: rejected early) and skin lists (searched
     with a margin m, narrowed by near_segment_pairs / near_node_facet_pairs and kept until a

@@ -291,6 +291,37 @@ def _nf_reach(r, t_max, pen_max):
 
 
 @loop_kernel
+def _node_quad_plane_gap(x, nd, quads, q):
+    """A lower bound of the distance of node ``nd`` from the bilinear facet ``q``: with
+    ``X(xi, eta) = c + a xi + b eta + d xi eta`` and ``N = a x b / |a x b|``, the facet
+    lies within ``|N . d|`` of its mid-plane ``N . (X - c) = 0`` (``|xi eta| <= 1``), so
+    ``|N . (x - c)| - |N . d|`` bounds the distance of ``x`` from it (0 for a degenerate
+    facet).  On a tube's facets it rejects the pairs whose node lies across the tube from
+    the facet but inside its box."""
+    i0, i1, i2, i3 = quads[q, 0], quads[q, 1], quads[q, 2], quads[q, 3]
+    a0 = 0.25 * (x[i1, 0] + x[i2, 0] - x[i0, 0] - x[i3, 0])
+    a1 = 0.25 * (x[i1, 1] + x[i2, 1] - x[i0, 1] - x[i3, 1])
+    a2 = 0.25 * (x[i1, 2] + x[i2, 2] - x[i0, 2] - x[i3, 2])
+    b0 = 0.25 * (x[i2, 0] + x[i3, 0] - x[i0, 0] - x[i1, 0])
+    b1 = 0.25 * (x[i2, 1] + x[i3, 1] - x[i0, 1] - x[i1, 1])
+    b2 = 0.25 * (x[i2, 2] + x[i3, 2] - x[i0, 2] - x[i1, 2])
+    n0 = a1 * b2 - a2 * b1
+    n1 = a2 * b0 - a0 * b2
+    n2 = a0 * b1 - a1 * b0
+    nn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    if nn == 0.0:
+        return 0.0
+    side = 0.0                      # N . (x - c) |a x b|
+    warp = 0.0                      # N . d |a x b|
+    for k in range(3):
+        nk = n0 if k == 0 else (n1 if k == 1 else n2)
+        c = 0.25 * (x[i0, k] + x[i1, k] + x[i2, k] + x[i3, k])
+        side += nk * (x[nd, k] - c)
+        warp += nk * 0.25 * (x[i0, k] - x[i1, k] + x[i2, k] - x[i3, k])
+    return (abs(side) - abs(warp)) / nn
+
+
+@loop_kernel
 def _node_quad_box_d2(x, nd, quads, q):
     """Squared distance of node ``nd`` from the bounding box of quad ``q``'s nodes."""
     d2 = 0.0
@@ -330,7 +361,9 @@ def _nf_project(x, fset, t_max, p0, p1, pd, prj):
     node_facet_contact); ``prj`` (8,) scratch.
 
     Early reject: a pair whose node is farther from the bounding box of the quad's nodes
-    (which holds the bilinear facet, so the box distance bounds |dist| from below) than
+    (which holds the bilinear facet, so the box distance bounds |dist| from below), or
+    from the slab about the facet's mid-plane that holds it
+    (:func:`_node_quad_plane_gap`), than
     ``T = max(r + t_max/2 + SOFTMIN_REACH tau, pen_max - r)`` gets pd = inf.  Any contact
     has |dist| <= T (in front: |dist| < r + t/2; behind: |dist| + r + t/2 <= pen_max), and
     so has every facet of a node in contact whose soft-minimum weight exceeds
@@ -350,6 +383,8 @@ def _nf_project(x, fset, t_max, p0, p1, pd, prj):
             continue
         lim = _nf_reach(node_r[i], t_max, pen_max)
         if _node_quad_box_d2(x, nd, quads, q) > lim * lim:
+            continue
+        if _node_quad_plane_gap(x, nd, quads, q) > lim:
             continue
         project_quad(x, quads, q, x[nd], True, prj)
         d0 = x[nd, 0] - prj[2]
