@@ -19,6 +19,7 @@ rule tensile_fit:
     wildcard_constraints:
         component="closed_tube|open_tube|fabric_tube",
     threads: 1
+    priority: 10      # Table 2 feeds the hi-fi chain, the longest path of the run: its fits go before the branch and ROM jobs
     shell:
         "NUMBA_NUM_THREADS={threads} {HP} stage tensile-fit --component {wildcards.component} "
         "--reference {input.ref} --settings '{params.settings}' "
@@ -31,6 +32,7 @@ rule table2:
         CATALOGUE.tensile_fits(TESTS, RES),
     output:
         f"{RES}/tensile/table2.csv",
+    priority: 10
     log:
         f"{RES}/logs/table2.log",
     params:
