@@ -369,7 +369,8 @@ def _nf_project(x, fset, t_max, p0, p1, pd, prj):
     so has every facet of a node in contact whose soft-minimum weight exceeds
     exp(-SOFTMIN_REACH) (its h within SOFTMIN_REACH tau of h_min < r), so if a node is in
     contact its closest facet and every facet of non-negligible weight are kept, and if it
-    is rejected no pair of the node can be in contact: the result is unchanged.
+    is rejected no pair of the node can be in contact: the result is unchanged up to the
+    round-off of the dropped pairs' weights (below exp(-SOFTMIN_REACH) of the closest's).
     """
     nodes, node_r, quads, quad_sign = fset.nodes, fset.node_r, fset.quads, fset.quad_sign
     pairs, pen_max = fset.pairs, fset.pen_max
