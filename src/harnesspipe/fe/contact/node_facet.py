@@ -305,19 +305,16 @@ def _node_quad_plane_gap(x, nd, quads, q):
     b0 = 0.25 * (x[i2, 0] + x[i3, 0] - x[i0, 0] - x[i1, 0])
     b1 = 0.25 * (x[i2, 1] + x[i3, 1] - x[i0, 1] - x[i1, 1])
     b2 = 0.25 * (x[i2, 2] + x[i3, 2] - x[i0, 2] - x[i1, 2])
-    n0 = a1 * b2 - a2 * b1
-    n1 = a2 * b0 - a0 * b2
-    n2 = a0 * b1 - a1 * b0
-    nn = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    n = (a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0)     # a x b
+    nn = math.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
     if nn == 0.0:
         return 0.0
     side = 0.0                      # N . (x - c) |a x b|
     warp = 0.0                      # N . d |a x b|
     for k in range(3):
-        nk = n0 if k == 0 else (n1 if k == 1 else n2)
         c = 0.25 * (x[i0, k] + x[i1, k] + x[i2, k] + x[i3, k])
-        side += nk * (x[nd, k] - c)
-        warp += nk * 0.25 * (x[i0, k] - x[i1, k] + x[i2, k] - x[i3, k])
+        side += n[k] * (x[nd, k] - c)
+        warp += n[k] * 0.25 * (x[i0, k] - x[i1, k] + x[i2, k] - x[i3, k])
     return (abs(side) - abs(warp)) / nn
 
 
