@@ -18,7 +18,8 @@ import pandas as pd
 from harnesspipe.fe.assembly.band import scatter_pair
 from harnesspipe.fe.elements.beam import (NDOF_NODE, BeamMesh, FibreMaterial, FibreSection,
                                           assemble_beams, initial_frames, lobatto_points)
-from harnesspipe.fe.elements.bushing import bushing_response, bushing_stiffness
+from harnesspipe.fe.elements.bushing import (Bushings, BushingState, bushing_forces,
+                                             bushing_stiffness)
 from harnesspipe.fe.elements.truss import truss_response
 from harnesspipe.fe.materials.fiber import disc_fibres
 from harnesspipe.fe.rotation import rotate_nodes
@@ -187,11 +188,9 @@ class YHarness:
         self.pull = pull                      # t -> crosshead displacement vector
         self.xi_g, self.w_g = lobatto_points(mesh.n_gauss)
         self.beams = [_Beams(self.X, conn, properties[case], mesh) for case, conn in layout.beams]
-        self.bushings = [self._bushing(properties[case], l_twb, a, b)
-                         for case, l_twb, a, b in layout.bushings]
-        nb = len(self.bushings)
-        self.d_state = np.zeros((3, nb, 6))   # committed d, d_dot, d_ddot
-        self.d_trial = np.zeros((2, nb, 6))   # d, d_dot of the current iterate
+        self.bushings = self._bushings(properties, layout.bushings, alpha)
+        nb = len(layout.bushings)
+        self.bushing_state = BushingState(np.zeros((3, nb, 6)), np.zeros((2, nb, 6)))
         pairs = [c for _, c in layout.beams] + [np.array([[a, b]]) for _, _, a, b in layout.bushings]
         pairs.append(np.array([[layout.tip, layout.head]]))
         self.bandwidth = NDOF_NODE * int(np.max(np.abs(np.diff(np.vstack(pairs), axis=1)))) + 5
@@ -208,15 +207,21 @@ class YHarness:
         self.rates = None
         self._committed = (self.u.copy(), self.quat.copy())
 
-    def _bushing(self, props, l_twb, a, b):
-        """(a, b, dX, E0, k_diag): eq. 14 stiffnesses, frame axis 1 along the TWB."""
-        E, r = props["E"], props["radius"]
-        k_diag = bushing_stiffness(E, E / (2.0 * (1.0 + props.get("nu", NU))), r, l_twb)
-        dX = self.X[b] - self.X[a]
-        e1 = dX / np.linalg.norm(dX)
-        e3 = np.array([0.0, 0.0, 1.0])
-        E0 = np.column_stack((e1, np.cross(e3, e1), e3))
-        return a, b, dX, E0, k_diag
+    def _bushings(self, properties, joints, alpha) -> Bushings:
+        """The break-out bushings: eq. 14 stiffnesses, frame axis 1 along each TWB."""
+        pairs, dXs, frames, ks = [], [], [], []
+        for case, l_twb, a, b in joints:
+            props = properties[case]
+            E, r = props["E"], props["radius"]
+            ks.append(bushing_stiffness(E, E / (2.0 * (1.0 + props.get("nu", NU))), r, l_twb))
+            dX = self.X[b] - self.X[a]
+            e1 = dX / np.linalg.norm(dX)
+            e3 = np.array([0.0, 0.0, 1.0])
+            pairs.append((a, b))
+            dXs.append(dX)
+            frames.append(np.column_stack((e1, np.cross(e3, e1), e3)))
+        return Bushings(np.array(pairs, dtype=np.int64), np.array(dXs), np.array(frames),
+                        np.array(ks), float(alpha))
 
     def _lumped_mass(self, properties) -> np.ndarray:
         m = np.zeros((self.X.shape[0], NDOF_NODE))
@@ -246,10 +251,11 @@ class YHarness:
         for part in self.beams:
             part.hist[:] = part.hist_trial
         r = self.rates
-        d_n, v_n, a_n = self.d_state
-        step = self.d_trial[0] - d_n
-        self.d_state[2] = r.a_d * step + r.a_v * v_n + r.a_a * a_n
-        self.d_state[:2] = self.d_trial
+        committed, trial = self.bushing_state
+        d_n, v_n, a_n = committed
+        step = trial[0] - d_n
+        committed[2] = r.a_d * step + r.a_v * v_n + r.a_a * a_n
+        committed[:2] = trial
         self._committed = (self.u.copy(), self.quat.copy())
 
     def revert(self):
@@ -268,14 +274,10 @@ class YHarness:
                            part.hist_trial, True, self._f_part, self._band_part, self.bandwidth)
             self.f += self._f_part
             self.band += self._band_part
-        fe, Ke = np.zeros(12), np.zeros((12, 12))
         x = self.X + self.u
-        r = self.rates
-        for k, (a, b, dX, E0, k_diag) in enumerate(self.bushings):
-            bushing_response(dX, x[a], x[b], self.quat[a], self.quat[b], E0, k_diag, self.alpha,
-                             r.c_d, r.c_v, r.c_a, self.d_state[0, k], self.d_state[1, k],
-                             self.d_state[2, k], self.d_trial[0, k], self.d_trial[1, k], fe, Ke)
-            scatter_pair(a, b, fe, Ke, self.f, self.band, self.bandwidth)
+        bushing_forces(self.bushings, x, self.quat, self.rates, self.bushing_state, self.f,
+                       self.band, self.bandwidth)
+        fe, Ke = np.zeros(12), np.zeros((12, 12))
         tip, head = self.layout.tip, self.layout.head
         g = self.layout.geometry
         self.tension = truss_response(x[tip], x[head], g.H, g.strand_EA, fe, Ke)
