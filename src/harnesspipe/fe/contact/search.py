@@ -24,9 +24,21 @@ for wires); a cell much smaller than the boxes multiplies the entries.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
+
+
+class Grid(NamedTuple):
+    """The grid of :func:`box_pairs` with the boxes of set B registered: lowest corner
+    ``origin`` (3,), cell edge ``cell``, cells per axis ``dims`` (3,), and the sorted
+    entries (cell key ``keys``, box id ``ids``) of :func:`_register`."""
+    origin: np.ndarray
+    cell: float
+    dims: np.ndarray
+    keys: np.ndarray
+    ids: np.ndarray
 
 
 @njit(cache=True)
@@ -123,8 +135,10 @@ def _cell_range(lo, hi, i, origin, cell, dims):
 
 
 @njit(cache=True)
-def _query(i, lo_a, hi_a, lo_b, hi_b, keys, ids, origin, cell, dims, same_set, out, start):
-    """Count (out is None-like: start < 0) or write the pairs of box i of A."""
+def _query(i, lo_a, hi_a, lo_b, hi_b, grid, same_set, out, start):
+    """Count (out is None-like: start < 0) or write the pairs of box i of A; ``grid`` the
+    :class:`Grid` with B's boxes registered."""
+    keys, ids, origin, cell, dims = grid.keys, grid.ids, grid.origin, grid.cell, grid.dims
     npair = 0
     x0, x1, y0, y1, z0, z1 = _cell_range(lo_a, hi_a, i, origin, cell, dims)
     nk = keys.shape[0]
@@ -181,19 +195,18 @@ def box_pairs(lo_a, hi_a, lo_b, hi_b, cell, same_set):
     if float(dims[0]) * float(dims[1]) * float(dims[2]) > 4.0e18:
         raise ValueError("box_pairs: cell too small for the domain (int64 key overflow)")
     keys, ids = _register(lo_b, hi_b, origin, cell, dims)
+    grid = Grid(origin, cell, dims, keys, ids)
     dummy = np.empty((0, 2), dtype=np.int64)
     counts = np.empty(n_a, dtype=np.int64)
     for i in prange(n_a):
-        counts[i] = _query(i, lo_a, hi_a, lo_b, hi_b, keys, ids, origin, cell, dims,
-                           same_set, dummy, -1)
+        counts[i] = _query(i, lo_a, hi_a, lo_b, hi_b, grid, same_set, dummy, -1)
     offsets = np.empty(n_a + 1, dtype=np.int64)
     offsets[0] = 0
     for i in range(n_a):
         offsets[i + 1] = offsets[i] + counts[i]
     out = np.empty((offsets[n_a], 2), dtype=np.int64)
     for i in prange(n_a):
-        _query(i, lo_a, hi_a, lo_b, hi_b, keys, ids, origin, cell, dims, same_set, out,
-               offsets[i])
+        _query(i, lo_a, hi_a, lo_b, hi_b, grid, same_set, out, offsets[i])
     return out
 
 
