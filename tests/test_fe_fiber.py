@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 import harnesspipe  # noqa: F401
-from harnesspipe.fe.materials.fiber import disc_fibres, fibre_update, section_response
+from harnesspipe.fe.materials.fiber import (FibreHistory, FibreMaterial, FibreSection, disc_fibres,
+                                            fibre_update, section_response)
 from harnesspipe.fe.materials.hardening import flow_stress
 
 
@@ -63,8 +64,9 @@ def test_section_reaches_the_plastic_moment_of_a_disc():
     s, D = np.zeros(3), np.zeros((3, 3))
     nf = y.size
     kappa = 2000 * sigma_y / (E * r)
-    section_response(0.0, 0.0, kappa, y, z, A, np.zeros(nf), np.zeros(nf), np.zeros(nf),
-                     np.zeros(nf), E, sigma_y, 0.0, 1.0, False, s, D)
+    hist = FibreHistory(*(np.zeros((1, nf)) for _ in range(4)))
+    section_response(0.0, 0.0, kappa, FibreSection(y, z, A, 0.0), FibreMaterial(E, sigma_y, 0.0, 1.0),
+                     False, hist, 0, s, D)
     assert s[2] == pytest.approx(4.0 / 3.0 * sigma_y * r**3, rel=2e-3)
     assert abs(s[0]) < 1e-9 * sigma_y * r**2
 
@@ -73,15 +75,16 @@ def test_section_tangent_matches_finite_difference():
     r, E, sigma_y, K, n = 7.05, 15.7, 0.6, 1.59, 0.3
     y, z, A = disc_fibres(r, 4, 12)
     nf = y.size
-    hist = [np.full(nf, 0.0) for _ in range(4)]
+    sec, mat = FibreSection(y, z, A, 0.0), FibreMaterial(E, sigma_y, K, n)
+    hist = FibreHistory(*(np.zeros((1, nf)) for _ in range(4)))
     e = np.array([1e-3, 0.004, -0.006])
     s, D = np.zeros(3), np.zeros((3, 3))
-    section_response(*e, y, z, A, *hist, E, sigma_y, K, n, False, s, D)
+    section_response(*e, sec, mat, False, hist, 0, s, D)
     h = 1e-8
     for j in range(3):
         sp, sm = np.zeros(3), np.zeros(3)
-        section_response(*(e + h * np.eye(3)[j]), y, z, A, *hist, E, sigma_y, K, n, False, sp, np.zeros((3, 3)))
-        section_response(*(e - h * np.eye(3)[j]), y, z, A, *hist, E, sigma_y, K, n, False, sm, np.zeros((3, 3)))
+        section_response(*(e + h * np.eye(3)[j]), sec, mat, False, hist, 0, sp, np.zeros((3, 3)))
+        section_response(*(e - h * np.eye(3)[j]), sec, mat, False, hist, 0, sm, np.zeros((3, 3)))
         assert np.allclose(D[:, j], (sp - sm) / (2 * h), rtol=1e-5, atol=1e-6 * np.abs(D).max())
 
 

@@ -6,7 +6,7 @@ from scipy.optimize import brentq
 
 import harnesspipe  # noqa: F401  (sets the Numba cache)
 from harnesspipe.fe.materials.hardening import flow_stress
-from harnesspipe.fe.materials.plane_stress import (EPS33, EPS_BAR_P, STATE_SIZE,
+from harnesspipe.fe.materials.plane_stress import (EPS33, EPS_BAR_P, STATE_SIZE, J2Material,
                                                    fabric_shear_modulus, j2_plane_stress,
                                                    orthotropic_plane_stress_stiffness)
 
@@ -18,7 +18,8 @@ MATERIALS = [(1559.0, 0.42, 8.6, 25.6, 0.12), (93.5, 0.4, 10.0, 30.8, 0.60),
 def update(eps, state, mat):
     sig, D = np.zeros(3), np.zeros((3, 3))
     new = np.zeros(STATE_SIZE)
-    j2_plane_stress(np.asarray(eps, float), state, *mat, sig, D, new, np.zeros(4), np.zeros((4, 4)))
+    j2_plane_stress(np.asarray(eps, float), state, J2Material(*mat), sig, D, new, np.zeros(4),
+                    np.zeros((4, 4)))
     return sig, D, new
 
 

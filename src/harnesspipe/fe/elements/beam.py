@@ -30,29 +30,14 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.materials.fiber import section_response
+from harnesspipe.fe.materials.fiber import (FibreHistory, FibreMaterial, FibreSection,
+                                            section_response)
 from harnesspipe.fe.rotation import kh_matrix, log_matrix, quat_to_matrix, skew, ts_inv
 
 NDOF_NODE = 6
 NDOF_ELEM = 12
 BANDWIDTH = 2 * NDOF_NODE - 1  # half bandwidth of a chain of two-node elements
 STRAIN_DOFS = ((0, 0), (2, 5), (3, 6))  # local dofs of e0 (u; 2nd coefficient 0), kappa_y, kappa_z
-
-
-class FibreSection(NamedTuple):
-    """Fibre section of an element (:mod:`harnesspipe.fe.materials.fiber`)."""
-    y: np.ndarray           # (nf,) fibre coordinates in the section
-    z: np.ndarray           # (nf,)
-    area: np.ndarray        # (nf,) fibre areas
-    GJ: float               # torsional stiffness (elastic torsion)
-
-
-class FibreMaterial(NamedTuple):
-    """Eq. 2 J2 material of the fibres."""
-    E: float
-    sigma_y: float
-    K: float
-    n: float
 
 
 class BeamMesh(NamedTuple):
@@ -64,12 +49,22 @@ class BeamMesh(NamedTuple):
     w_g: np.ndarray         # (ng,) their weights
 
 
-class FibreHistory(NamedTuple):
-    """Fibre history of one element: committed arrays read, trial arrays written."""
-    eps_p_old: np.ndarray   # (ng, nf) signed plastic strain
-    alpha_old: np.ndarray   # (ng, nf) accumulated plastic strain
-    eps_p_new: np.ndarray   # (ng, nf)
-    alpha_new: np.ndarray   # (ng, nf)
+class BeamElement(NamedTuple):
+    """Reference of one element: end nodes ``X1, X2`` (3,), initial frame ``R0`` (3, 3),
+    the Gauss-Lobatto rule ``xi_g, w_g`` (ng,) on [0, 1]."""
+    X1: np.ndarray
+    X2: np.ndarray
+    R0: np.ndarray
+    xi_g: np.ndarray
+    w_g: np.ndarray
+
+
+class NodePair(NamedTuple):
+    """Current end nodes ``x1, x2`` (3,) and their quaternions ``q1, q2`` (4,)."""
+    x1: np.ndarray
+    x2: np.ndarray
+    q1: np.ndarray
+    q2: np.ndarray
 
 
 class BeamWork(NamedTuple):
@@ -177,17 +172,19 @@ def local_rotation(Rr, Rg, R0, Rbar, theta, work4):
 
 
 @njit(cache=True)
-def local_bernoulli(u, th1, th2, l0, xi_g, w_g, sec, mat, elastic, hist, fl, Kl, s, D, B):
-    """Local force fl (7) and tangent Kl (7x7) of the small-strain Bernoulli element
-    (section ``sec``, material ``mat``, history ``hist``: :class:`FibreSection`,
-    :class:`FibreMaterial`, :class:`FibreHistory`).
+def local_bernoulli(u, th1, th2, l0, xi_g, w_g, sec, mat, elastic, hist, work):
+    """Local force ``work.fl`` (7) and tangent ``work.Kl`` (7x7) of the small-strain
+    Bernoulli element (section ``sec``, material ``mat``, history ``hist``:
+    :class:`FibreSection`, :class:`FibreMaterial`, :class:`FibreHistory`; ``work`` a
+    :class:`BeamWork`).
 
     Generalised strains at xi: e0 = u/l0, kappa_y = ((6xi-4) th1_y + (6xi-2) th2_y)/l0,
     kappa_z likewise with the z rotations; torsion elastic, GJ (th2_x - th1_x)/l0.
-    ``B`` (3x7) is work: ``B[a, :2]`` holds the nonzero coefficients of strain a at
+    ``work.B`` (3x7): ``B[a, :2]`` holds the nonzero coefficients of strain a at
     the local dofs ``STRAIN_DOFS[a]``, so fl = int B^T s and Kl = int B^T D B touch
     only the nonzero entries.
     """
+    fl, Kl, s, D, B = work.fl, work.Kl, work.s, work.D, work.B
     for i in range(7):
         fl[i] = 0.0
         for j in range(7):
@@ -199,9 +196,7 @@ def local_bernoulli(u, th1, th2, l0, xi_g, w_g, sec, mat, elastic, hist, fl, Kl,
         b2 = (6.0 * xi - 2.0) / l0
         ky = b1 * th1[1] + b2 * th2[1]
         kz = b1 * th1[2] + b2 * th2[2]
-        section_response(e0, ky, kz, sec.y, sec.z, sec.area, hist.eps_p_old[g],
-                         hist.alpha_old[g], hist.eps_p_new[g], hist.alpha_new[g], mat.E,
-                         mat.sigma_y, mat.K, mat.n, elastic, s, D)
+        section_response(e0, ky, kz, sec, mat, elastic, hist, g, s, D)
         wl = w_g[g] * l0
         B[0, 0] = 1.0 / l0      # nonzero coefficients of B, at the dofs STRAIN_DOFS
         B[0, 1] = 0.0
@@ -282,16 +277,16 @@ def _b_matrix(Rr, Gt, Bg):
 
 
 @njit(cache=True)
-def element_response(X1, X2, R0, x1, x2, q1, q2, xi_g, w_g, sec, mat, elastic, hist,
-                     want_tangent, fg, Kg, work):
+def element_response(ref, cur, sec, mat, elastic, hist, want_tangent, fg, Kg, work):
     """Global internal force ``fg`` (12) and, if ``want_tangent``, tangent ``Kg`` (12x12).
 
-    ``X1, X2`` (3,) reference and ``x1, x2`` (3,) current nodes, ``R0`` (3, 3) initial
-    frame, ``q1, q2`` (4,) nodal quaternions, ``xi_g, w_g`` (ng,) Gauss-Lobatto rule on
-    [0, 1]; ``sec`` a :class:`FibreSection`, ``mat`` a :class:`FibreMaterial`,
-    ``elastic`` skips the return map, ``hist`` a :class:`FibreHistory` (trial arrays
-    written); ``work`` a :class:`BeamWork`.
+    ``ref`` the element's :class:`BeamElement`, ``cur`` its current :class:`NodePair`;
+    ``sec`` a :class:`FibreSection`, ``mat`` a :class:`FibreMaterial`, ``elastic`` skips
+    the return map, ``hist`` a :class:`FibreHistory` (trial arrays written); ``work`` a
+    :class:`BeamWork`.
     """
+    X1, X2, R0, xi_g, w_g = ref
+    x1, x2, q1, q2 = cur
     M33, V3, v4, fl, Kl, fa, Ka, s, D, B, Gt, Bg, t12, W77 = work
     Rg1 = M33[0]
     Rg2 = M33[1]
@@ -311,7 +306,7 @@ def element_response(X1, X2, R0, x1, x2, q1, q2, xi_g, w_g, sec, mat, elastic, h
     l0 = np.sqrt((X2[0] - X1[0]) ** 2 + (X2[1] - X1[1]) ** 2 + (X2[2] - X1[2]) ** 2)
     local_rotation(Rr, Rg1, R0, Rbar, th1, v4)
     local_rotation(Rr, Rg2, R0, Rbar, th2, v4)
-    local_bernoulli(ln - l0, th1, th2, l0, xi_g, w_g, sec, mat, elastic, hist, fl, Kl, s, D, B)
+    local_bernoulli(ln - l0, th1, th2, l0, xi_g, w_g, sec, mat, elastic, hist, work)
     ts_inv(th1, T1)
     ts_inv(th2, T2)
     # f_a = B_a^T f_l with B_a = diag(1, Ts^-1(th1), Ts^-1(th2))
@@ -539,8 +534,8 @@ def assemble_beams(mesh, u, quat, sec, mat, elastic, hist, hist_trial, want_tang
         for i in range(3):
             x1[i] = X[a, i] + u[a, i]
             x2[i] = X[b, i] + u[b, i]
-        element_response(X[a], X[b], R0[e], x1, x2, quat[a], quat[b], mesh.xi_g, mesh.w_g, sec,
-                         mat, elastic,
+        element_response(BeamElement(X[a], X[b], R0[e], mesh.xi_g, mesh.w_g),
+                         NodePair(x1, x2, quat[a], quat[b]), sec, mat, elastic,
                          FibreHistory(hist[0, e], hist[1, e], hist_trial[0, e], hist_trial[1, e]),
                          want_tangent, fe, Ke, work)
         scatter_element(a, b, fe, Ke, want_tangent, f, band, bw)

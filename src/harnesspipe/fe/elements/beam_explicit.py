@@ -34,8 +34,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from harnesspipe.fe.elements.beam import (FibreHistory, FibreMaterial, FibreSection, beam_work,
-                                          element_response)
+from harnesspipe.fe.elements.beam import (BeamElement, FibreHistory, FibreMaterial, FibreSection,
+                                          NodePair, beam_work, element_response)
 from harnesspipe.fe.loops import loop_kernel
 from harnesspipe.fe.materials.hardening import positive_pow, return_map_from
 from harnesspipe.fe.rotation import log_matrix, ts_inverse_coeff
@@ -87,8 +87,8 @@ def beam_scratch():
 @njit(cache=True, inline="always")
 def _section_force(e0, kappa_y, kappa_z, sec, mat, beams, e, g):
     """Stress resultants ``(N, M_y, M_z)`` of the fibre section ``sec``
-    (:class:`~harnesspipe.fe.elements.beam.FibreSection`) of eq. 2 material ``mat``
-    (:class:`~harnesspipe.fe.elements.beam.FibreMaterial`), no tangent.
+    (:class:`~harnesspipe.fe.materials.fiber.FibreSection`) of eq. 2 material ``mat``
+    (:class:`~harnesspipe.fe.materials.fiber.FibreMaterial`), no tangent.
 
     The fibre strain, eq. 2 return and summation order of
     :func:`harnesspipe.fe.materials.fiber.section_response`; the section tangent ``D`` is not formed,
@@ -417,8 +417,9 @@ def beam_forces_reference(beams, trial, x, quat, f_int, n_chunks):
             b = conn[e, 1]
             k = beams.sec_id[e]
             m = beams.mat_id[e]
-            element_response(beams.X0[a], beams.X0[b], beams.R0[e], x[a], x[b], quat[a], quat[b],
-                             beams.xi_g, beams.w_g,
+            element_response(BeamElement(beams.X0[a], beams.X0[b], beams.R0[e], beams.xi_g,
+                                         beams.w_g),
+                             NodePair(x[a], x[b], quat[a], quat[b]),
                              FibreSection(beams.sec_y[k], beams.sec_z[k], beams.sec_area[k],
                                           beams.sec_GJ[k]),
                              FibreMaterial(mats[m, 0], mats[m, 1], mats[m, 2], mats[m, 3]), False,

@@ -9,12 +9,16 @@ tangent) is :mod:`harnesspipe.fe.elements.shell_element`.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
 from harnesspipe.fe.elements.shell_element import (DRILL_FACTOR, MAT_J2, MAT_ORTHOTROPIC,
-                                                   N_THICKNESS, drilling, element_force,
-                                                   element_tangent, material_axes,
+                                                   N_THICKNESS, DrillWork, ElementRef,
+                                                   Perturbed, drill_arrays,
+                                                   drilling, element_force, element_tangent,
+                                                   material_axes, perturbed_arrays,
                                                    reference_element, rotation_matrix,
                                                    shear_modulus, work_arrays)
 from harnesspipe.fe.materials.plane_stress import EPS33, STATE_SIZE, fabric_shear_modulus
@@ -22,20 +26,61 @@ from harnesspipe.fe.materials.plane_stress import EPS33, STATE_SIZE, fabric_shea
 DOF_PER_NODE = 6
 
 
-@njit(cache=True)
-def _buffers():
-    """Scratch of :func:`_element_contributions`, allocated once per assembly."""
-    return (np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 6)),
-            np.empty((24, 24)), np.empty((4, 6)), np.empty((4, 6)), np.empty((4, 3)),
-            np.empty((4, 3)),
-            np.empty((4, 3)), np.empty(3), np.empty(24, dtype=np.bool_), np.empty((4, 24)),
-            np.empty(4), np.empty(4), np.empty(4), np.empty(3), np.empty(3), np.empty(3),
-            np.empty((4, 3)), np.empty((4 * N_THICKNESS, STATE_SIZE)), work_arrays())
+class ShellMesh(NamedTuple):
+    """The mesh and its reference data: ``conn`` (n_el, 4), reference directors ``D``
+    (n_nodes, 3), per element the drilling vectors ``T0`` (n_el, 4, 3), the data of
+    :func:`reference_element` (``Jinv``, ``dV``, ``shear_ref``, centre Jacobian ``Jc``,
+    ``area``) and :func:`material_axes`' ``axes`` (n_el, 4, 5, 2); the thickness ``h0``
+    and the material row ``mat`` (see :func:`shell_element.element_force`)."""
+    conn: np.ndarray
+    D: np.ndarray
+    T0: np.ndarray
+    Jinv: np.ndarray
+    dV: np.ndarray
+    shear_ref: np.ndarray
+    Jc: np.ndarray
+    area: np.ndarray
+    axes: np.ndarray
+    h0: float
+    mat: np.ndarray
+
+
+class Configuration(NamedTuple):
+    """The current configuration: nodes ``x`` (n_nodes, 3), nodal rotations ``Q``
+    (n_nodes, 3, 3) and element thicknesses ``h`` (n_el,)."""
+    x: np.ndarray
+    Q: np.ndarray
+    h: np.ndarray
+
+
+class Scratch(NamedTuple):
+    """Scratch of one element, allocated once per assembly: its nodes, directors and
+    drilling vectors (4, 3), force (4, 6), tangent (24, 24), active DOFs (24,), and the
+    groups of :mod:`harnesspipe.fe.elements.shell_element`."""
+    xe: np.ndarray
+    de: np.ndarray
+    se: np.ndarray
+    fe: np.ndarray
+    ke: np.ndarray
+    act: np.ndarray
+    pert: Perturbed
+    drill: DrillWork
+    work: tuple
 
 
 @njit(cache=True)
-def _gather(e, conn, x, Q, D, T0, xe, de, se):
+def _scratch():
+    """A :class:`Scratch`."""
+    return Scratch(np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 3)), np.empty((4, 6)),
+                   np.empty((24, 24)), np.empty(24, dtype=np.bool_), perturbed_arrays(),
+                   drill_arrays(), work_arrays())
+
+
+@njit(cache=True)
+def _gather(e, mesh, cfg, xe, de, se):
     """Element nodes, directors Q_a D_a and drilling vectors Q_a T0_a."""
+    conn, D, T0 = mesh.conn, mesh.D, mesh.T0
+    x, Q = cfg.x, cfg.Q
     for a in range(4):
         node = conn[e, a]
         for i in range(3):
@@ -46,65 +91,69 @@ def _gather(e, conn, x, Q, D, T0, xe, de, se):
 
 
 @njit(cache=True)
-def _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat,
-                           axes, state_old, state_new, active, buf):
-    """Force (buf[3]) and tangent (buf[4]) of element ``e`` incl. the drilling penalty."""
-    (xe, de, se, fe, ke, fp, fm, xp, dp, sp_, axis, act, grad, omega, om_p, om_m,
-     w3a, w3b, w3c, w43, scratch, work) = buf
-    _gather(e, conn, x, Q, D, T0, xe, de, se)
+def _element_ref(e, mesh):
+    """The :class:`ElementRef` of element ``e`` (views into the mesh's arrays)."""
+    return ElementRef(mesh.Jinv[e], mesh.dV[e], mesh.shear_ref[e], mesh.axes[e], mesh.h0,
+                      mesh.mat)
+
+
+@njit(cache=True)
+def _drill_stiffness(e, mesh):
+    """The drilling penalty k_d = DRILL_FACTOR G h0 A of element ``e``."""
+    return DRILL_FACTOR * shear_modulus(mesh.mat) * mesh.h0 * mesh.area[e]
+
+
+@njit(cache=True)
+def _element_contributions(e, mesh, cfg, state_old, state_new, active, buf):
+    """Force (``buf.fe``) and tangent (``buf.ke``) of element ``e`` incl. the drilling
+    penalty."""
+    _gather(e, mesh, cfg, buf.xe, buf.de, buf.se)
     for a in range(4):
         for i in range(6):
-            act[6 * a + i] = active[6 * conn[e, a] + i]
-    element_force(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, axes[e], state_old[e],
-                  state_new[e], fe, work)
-    element_tangent(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, axes[e], state_old[e],
-                    scratch, act, ke, fp, fm, xp, dp, axis, work)
-    k_d = DRILL_FACTOR * shear_modulus(mat) * h0 * area[e]
-    drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_, axis,
-             w3a, w3b, w3c, w43)
+            buf.act[6 * a + i] = active[6 * mesh.conn[e, a] + i]
+    ref = _element_ref(e, mesh)
+    element_force(buf.xe, buf.de, ref, cfg.h[e], state_old[e], state_new[e], buf.fe, buf.work)
+    element_tangent(buf.xe, buf.de, ref, cfg.h[e], state_old[e], buf.act, buf.ke, buf.pert,
+                    buf.work)
+    drilling(buf.xe, buf.de, buf.se, mesh.Jc[e], _drill_stiffness(e, mesh), buf.fe, buf.ke,
+             buf.pert, buf.drill)
 
 
 @njit(cache=True)
-def assemble(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat, axes, state_old,
-             state_new, active, f, kdata):
+def assemble(mesh, cfg, state_old, state_new, active, f, kdata):
     """Internal force ``f`` and element tangents ``kdata`` (n_el, 576) in the order of
-    :func:`tangent_pattern`.  ``x`` (n_nodes, 3) current nodes, ``Q`` (n_nodes, 3, 3)
-    nodal rotations, ``D`` (n_nodes, 3) reference directors, ``T0`` (n_el, 4, 3),
-    reference data per element, ``axes`` (n_el, 4, 5, 2) material axes,
+    :func:`tangent_pattern`, for the :class:`ShellMesh` in the :class:`Configuration`
+    ``cfg``; ``state_old`` the committed and ``state_new`` the trial histories,
     ``active`` (6 n_nodes,) DOFs that may move."""
-    buf = _buffers()
-    fe, ke = buf[3], buf[4]
+    buf = _scratch()
     f[:] = 0.0
+    conn = mesh.conn
     for e in range(conn.shape[0]):
-        _element_contributions(e, conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h,
-                               mat, axes, state_old, state_new, active, buf)
+        _element_contributions(e, mesh, cfg, state_old, state_new, active, buf)
         for a in range(4):
             for i in range(6):
-                f[6 * conn[e, a] + i] += fe[a, i]
+                f[6 * conn[e, a] + i] += buf.fe[a, i]
         for i in range(24):
             for j in range(24):
-                kdata[e, 24 * i + j] = ke[i, j]
+                kdata[e, 24 * i + j] = buf.ke[i, j]
 
 
 @njit(cache=True)
-def internal_force(conn, x, Q, D, T0, Jinv, dV, shear_ref, Jc, area, h0, h, mat, axes, state_old,
-                   state_new, f):
+def internal_force(mesh, cfg, state_old, state_new, f):
     """Internal force only (explicit dynamics): as :func:`assemble` without tangents.
     The drilling penalty force is included through its difference gradient."""
-    buf = _buffers()
-    (xe, de, se, fe, ke, fp, fm, xp, dp, sp_, axis, act, grad, omega, om_p, om_m,
-     w3a, w3b, w3c, w43, scratch, work) = buf
+    buf = _scratch()
     f[:] = 0.0
+    conn = mesh.conn
     for e in range(conn.shape[0]):
-        _gather(e, conn, x, Q, D, T0, xe, de, se)
-        element_force(xe, de, Jinv[e], dV[e], shear_ref[e], h0, h[e], mat, axes[e], state_old[e],
-                      state_new[e], fe, work)
-        k_d = DRILL_FACTOR * shear_modulus(mat) * h0 * area[e]
-        drilling(xe, de, se, Jc[e], k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, sp_, axis,
-                 w3a, w3b, w3c, w43)
+        _gather(e, mesh, cfg, buf.xe, buf.de, buf.se)
+        element_force(buf.xe, buf.de, _element_ref(e, mesh), cfg.h[e], state_old[e],
+                      state_new[e], buf.fe, buf.work)
+        drilling(buf.xe, buf.de, buf.se, mesh.Jc[e], _drill_stiffness(e, mesh), buf.fe, buf.ke,
+                 buf.pert, buf.drill)
         for a in range(4):
             for i in range(6):
-                f[6 * conn[e, a] + i] += fe[a, i]
+                f[6 * conn[e, a] + i] += buf.fe[a, i]
 
 
 def tangent_pattern(conn):
@@ -213,6 +262,8 @@ class Shell:
         for e, nodes in enumerate(self.conn):
             material_axes(self.X[nodes], self.D[nodes], self.h0, np.array(a1[e], dtype=float),
                           self.axes[e])
+        self.mesh = ShellMesh(self.conn, self.D, self.T0, self.Jinv, self.dV, self.shear_ref,
+                              self.Jc, self.area, self.axes, self.h0, self.mat)
         self.n_dof = DOF_PER_NODE * n_nodes
         self.active = np.ones(self.n_dof, dtype=np.bool_)
         self.contact = contact
@@ -246,9 +297,8 @@ class Shell:
         self.active[np.asarray(dofs, dtype=np.int64)] = False
 
     def tangent_and_force(self):
-        assemble(self.conn, self.x, self.Q, self.D, self.T0, self.Jinv, self.dV, self.shear_ref,
-                 self.Jc, self.area, self.h0, self.h, self.mat, self.axes, self.state, self._trial,
-                 self.active, self._f, self._kdata)
+        assemble(self.mesh, self._configuration(), self.state, self._trial, self.active, self._f,
+                 self._kdata)
         K = self._sp.coo_matrix((self._kdata.ravel(), (self._rows, self._cols)),
                                 shape=(self.n_dof, self.n_dof)).tocsr()
         if self.contact is not None:
@@ -257,10 +307,11 @@ class Shell:
 
     def internal_force(self):
         """Internal force at the trial configuration, without tangent (explicit use)."""
-        internal_force(self.conn, self.x, self.Q, self.D, self.T0, self.Jinv, self.dV,
-                       self.shear_ref, self.Jc, self.area, self.h0, self.h, self.mat, self.axes,
-                       self.state, self._trial, self._f)
+        internal_force(self.mesh, self._configuration(), self.state, self._trial, self._f)
         return self._f
+
+    def _configuration(self):
+        return Configuration(self.x, self.Q, self.h)
 
     def _contact(self, f):
         nodes, axis, k = self.contact

@@ -24,7 +24,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.materials.plane_stress import EPS33, STATE_SIZE, j2_plane_stress
+from harnesspipe.fe.materials.plane_stress import (EPS33, STATE_SIZE, J2Material,
+                                                   j2_plane_stress)
 
 N_THICKNESS = 5
 ZETA, ZETA_W = np.polynomial.legendre.leggauss(N_THICKNESS)
@@ -33,14 +34,17 @@ DOF_PER_NODE = 3
 
 
 @njit(cache=True)
-def _element(X, Phi, ue, h0, h, mat, state_old, state_new, fe, ke, zeta, zeta_w, work):
-    """Internal force ``fe`` (6,) and tangent ``ke`` (6, 6) of one element.
+def _element(X, Phi, ue, h0, h, mat, state_old, state_new, fe, ke, work):
+    """Internal force ``fe`` (6,) and tangent ``ke`` (6, 6) of one element, integrated
+    over the thickness at the Gauss points ``ZETA`` with weights ``ZETA_W``.
 
     ``X`` (2, 2) reference (R, Z) of the nodes, ``Phi`` (2,) reference director
     angles, ``ue`` (6,) nodal (u_r, u_z, theta).  ``mat`` = (E, nu, sigma_y, K, n).
     ``work`` holds preallocated scratch arrays.
     """
-    E, nu, sigma_y, K, n = mat[0], mat[1], mat[2], mat[3], mat[4]
+    zeta, zeta_w = ZETA, ZETA_W
+    j2 = J2Material(mat[0], mat[1], mat[2], mat[3], mat[4])
+    E, nu = j2.E, j2.nu
     eps, sig, D, w4, w44, Ba, Bb, Bg = work
     dX0, dX1 = X[1, 0] - X[0, 0], X[1, 1] - X[0, 1]
     L0 = np.sqrt(dX0 * dX0 + dX1 * dX1)
@@ -71,7 +75,7 @@ def _element(X, Phi, ue, h0, h, mat, state_old, state_new, fe, ke, zeta, zeta_w,
         eps[0] = np.log(a / A)
         eps[1] = np.log(b / Bref)
         eps[2] = 0.0
-        j2_plane_stress(eps, state_old[k], E, nu, sigma_y, K, n, sig, D, state_new[k], w4, w44)
+        j2_plane_stress(eps, state_old[k], j2, sig, D, state_new[k], w4, w44)
         dV = 2.0 * np.pi * Bref * A * L0 * 0.5 * h0 * zeta_w[k]
         Ba[0], Ba[1], Ba[3], Ba[4] = s / L0, -c / L0, -s / L0, c / L0
         Ba[2] = -0.5 * xd - zc / L0
@@ -137,7 +141,6 @@ def assemble(X, Phi, conn, u, h0, h, mat, state_old, state_new, K, f):
     dofs = np.empty(6, dtype=np.int64)
     work = (np.empty(3), np.empty(3), np.empty((3, 3)), np.empty(4), np.empty((4, 4)),
             np.empty(6), np.empty(6), np.empty(6))
-    zeta, zeta_w = ZETA, ZETA_W
     for e in range(conn.shape[0]):
         for a in range(2):
             node = conn[e, a]
@@ -146,7 +149,7 @@ def assemble(X, Phi, conn, u, h0, h, mat, state_old, state_new, K, f):
             for i in range(3):
                 dofs[3 * a + i] = 3 * node + i
                 ue[3 * a + i] = u[3 * node + i]
-        _element(Xe, Phie, ue, h0, h[e], mat, state_old[e], state_new[e], fe, ke, zeta, zeta_w, work)
+        _element(Xe, Phie, ue, h0, h[e], mat, state_old[e], state_new[e], fe, ke, work)
         for i in range(6):
             f[dofs[i]] += fe[i]
             for j in range(6):

@@ -18,7 +18,8 @@ import numpy as np
 from numba import njit
 
 from harnesspipe.fe.materials.plane_stress import (EPS33, P11, P12, P22, P33, STATE_SIZE,
-                                                   j2_plane_stress_from, orthotropic_plane_stress,
+                                                   J2Material, j2_plane_stress_from,
+                                                   orthotropic_plane_stress,
                                                    orthotropic_plane_stress_stiffness)
 from harnesspipe.fe.materials.tube_wall import (T_SIZE, W_DH, W_DX, W_KE, W_KGT, W_KH,
                                                 tube_wall_resultants)
@@ -66,6 +67,17 @@ class Work(NamedTuple):
     st_new: np.ndarray      # (STATE_SIZE,) J2 history after a return
     w4: np.ndarray          # (4,) J2 Newton work
     w44: np.ndarray         # (4, 4)
+
+
+class PlaneLaw(NamedTuple):
+    """The law of a shell element's thickness points: eq. 12 (``ortho``, material axis 1
+    at ``(mc, ms)`` = (cos, sin) of its angle from e1) or eq. 2 J2 with the plane-stress
+    ``c_ps = E / (1 - nu^2)`` and ``nu_r = nu / (1 - nu)`` of its elastic predictor."""
+    ortho: bool
+    mc: float
+    ms: float
+    c_ps: float
+    nu_r: float
 
 
 @njit(cache=True, inline="always")
@@ -217,19 +229,22 @@ def _von_mises(sig):
 
 
 @njit(cache=True, inline="always")
-def _through_thickness(st, me, ortho, mc, ms, c_ps, nu_r, dt, d_m, kappa, eps, sig, Dm, Dj,
-                       st_new, w4, w44):
+def _through_thickness(st, me, law, dt, d_m, kappa, work):
     """Stress update at the ``N_THICKNESS`` Gauss-Legendre points (fibre positions of the
     thickness ``st[S_THICK]`` at the start of the step; BLT): the total strains
     ``eps <- eps + dt (d_m + z kappa)`` and the stresses of the element state ``st``
-    (N_STATE,) are advanced in place, with the eq. 12 law (``ortho``: stiffness ``Dm``
-    (3, 3), material axis ``(mc, ms)``) or eq. 2 J2 (``me`` the material row; closed-form
-    elastic predictor, the return of :func:`j2_plane_stress_from` only for a trial state
-    beyond the flow stress ``sigma_y + K sa``).  Returns the sums ``sum_k w_k sigma_k``
-    and ``sum_k w_k zeta_k sigma_k`` (the resultants N, M without their factors h/2,
+    (N_STATE,) are advanced in place, with the :class:`PlaneLaw` ``law``: eq. 12 (stiffness
+    ``work.Dm`` (3, 3)) or eq. 2 J2 (``me`` the material row; closed-form elastic
+    predictor, the return of :func:`j2_plane_stress_from` only for a trial state beyond
+    the flow stress ``sigma_y + K sa``).  Returns the sums ``sum_k w_k sigma_k`` and
+    ``sum_k w_k zeta_k sigma_k`` (the resultants N, M without their factors h/2,
     (h/2)^2), the stress power ``sum_k w_k sigma_mid : d`` and the plastic work
     ``sum_k w_k q dg`` (both per unit area and h/2), and ``sum_k eps_33``.
-    Work: eps, sig (3,), Dj (3, 3), st_new (STATE_SIZE,), w4 (4,), w44 (4, 4)."""
+    Scratch from ``work`` (:class:`Work`): eps, sig, Dj, st_new, w4, w44."""
+    ortho, mc, ms, c_ps, nu_r = law
+    eps, sig, Dm, Dj, st_new, w4, w44 = (work.eps, work.sig, work.Dm, work.Dj, work.st_new,
+                                         work.w4, work.w44)
+    j2 = J2Material(me[0], me[1], me[2], me[3], me[4])
     dmx, dmy, dmxy = d_m
     kx, ky, kxy = kappa
     hh = 0.5 * st[S_THICK]
@@ -257,9 +272,8 @@ def _through_thickness(st, me, ortho, mc, ms, c_ps, nu_r, dt, d_m, kappa, eps, s
             if qq <= fy * fy:
                 sold[EPS33] = sold[P33] - nu_r * (a11 + a22)
             else:
-                dg, st[o + PT_SA] = j2_plane_stress_from(eps, sold, st[o + PT_SA], me[0], me[1],
-                                                         me[2], me[3], me[4], sig, Dj, st_new, w4,
-                                                         w44, False)
+                dg, st[o + PT_SA] = j2_plane_stress_from(eps, sold, st[o + PT_SA], j2, sig, Dj,
+                                                         st_new, w4, w44, False)
                 for i in range(STATE_SIZE):
                     sold[i] = st_new[i]
             e33 += st[o + PT_MAT + EPS33]
@@ -377,15 +391,16 @@ def element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, work):
     thicknesses, ``mat`` (n_el, 5 or more) material rows, ``hg`` the hourglass coefficient;
     ``work`` the scratch (:class:`Work`).  Inlined into a loop kernel
     (:mod:`harnesspipe.fe.loops`): its arrays and views are not reference-counted."""
-    ef, loc, Dm, Dj, eps, sig, st_new, w4, w44 = work
+    ef, loc, Dm = work.ef, work.loc, work.Dm
     _local_nodes(e, x, v, conn, ef, loc)
     area, bb = _centroid_gradient(loc)
-    d_m, kappa, g_rate = _velocity_strains(loc)
+    rates = _velocity_strains(loc)
+    d_m, kappa, g_rate = rates
     q = _hourglass_rates(loc)
     st = state[e]
     me = mat[e]
     if me.shape[0] > MAT_KIND and me[MAT_KIND] == MAT_TUBE:
-        _tube_element(e, st, me, dt, hg, area, bb, d_m, kappa, g_rate, q, f_el, ef, loc)
+        _tube_element(e, st, me, dt, hg, area, bb, rates, q, f_el, work)
         return
     h_old = st[S_THICK]
     ortho = me.shape[0] > MAT_KIND and me[MAT_KIND] == MAT_ORTHOTROPIC
@@ -394,8 +409,8 @@ def element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, work):
     if ortho:
         orthotropic_plane_stress_stiffness(me[0], me[1], me[2] * me[MAT_COMPRESSION], me[3], Dm)
         mc, ms = st[S_MCOS], st[S_MSIN]
-    n_sum, m_sum, pw, wp, e33 = _through_thickness(st, me, ortho, mc, ms, c_ps, nu_r, dt, d_m,
-                                                   kappa, eps, sig, Dm, Dj, st_new, w4, w44)
+    law = PlaneLaw(ortho, mc, ms, c_ps, nu_r)
+    n_sum, m_sum, pw, wp, e33 = _through_thickness(st, me, law, dt, d_m, kappa, work)
     h = thick[e] if ortho else thick[e] * np.exp(e33 / N_THICKNESS)
     st[S_THICK] = h
     c_n = 0.5 * h                   # resultants with the updated thickness
@@ -410,11 +425,13 @@ def element_forces(e, x, v, conn, thick, mat, state, dt, hg, f_el, work):
 
 
 @njit(cache=True, inline="always")
-def _tube_element(e, st, me, dt, hg, area, bb, d_m, kappa, g_rate, q, f_el, ef, loc):
+def _tube_element(e, st, me, dt, hg, area, bb, rates, q, f_el, work):
     """:func:`element_forces` of a ridged-tube wall element (``MAT_TUBE``): resultants from
     :func:`harnesspipe.fe.materials.tube_wall.tube_wall_resultants` in the state's first
     ``T_SIZE`` slots, transverse shear ``kGt gamma``, no thickness change (the element's
-    thickness is its mass thickness only)."""
+    thickness is its mass thickness only).  ``rates`` the velocity strains
+    (:func:`_velocity_strains`)."""
+    d_m, kappa, g_rate = rates
     h = st[S_THICK]
     N, M, w, wp = tube_wall_resultants(st[:T_SIZE], me, st[S_MCOS], st[S_MSIN], dt, d_m, kappa)
     Q_old, Q = _transverse_shear(st, dt, me[W_KGT] / h, h, h, g_rate)
@@ -423,4 +440,4 @@ def _tube_element(e, st, me, dt, hg, area, bb, d_m, kappa, g_rate, q, f_el, ef, 
     st[S_W_HG] += w_hg
     st[S_W_INT] += area * (w + 0.5 * dt * ((Q_old[0] + Q[0]) * g_rate[0]
                                            + (Q_old[1] + Q[1]) * g_rate[1])) + w_hg
-    _nodal_forces(e, f_el, ef, loc, area, N, M, Q, H)
+    _nodal_forces(e, f_el, work.ef, work.loc, area, N, M, Q, H)

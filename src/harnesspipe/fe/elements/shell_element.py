@@ -47,10 +47,12 @@ O(h^2) (Miehe 1996; Perez-Foguet, Rodriguez-Ferran & Huerta 2000).
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
-from harnesspipe.fe.materials.plane_stress import (STATE_SIZE, j2_plane_stress,
+from harnesspipe.fe.materials.plane_stress import (STATE_SIZE, J2Material, j2_plane_stress,
                                                    orthotropic_plane_stress,
                                                    orthotropic_plane_stress_stiffness)
 
@@ -66,6 +68,45 @@ DRILL_FACTOR = 1.0e-3
 FD_STEP = 1.0e-6  # relative perturbation of the central-difference tangent
 MAT_KIND = 5  # index of the material kind in ``mat``
 MAT_J2, MAT_ORTHOTROPIC = 0, 1
+
+
+class ElementRef(NamedTuple):
+    """Reference data of one element: :func:`reference_element`'s inverse Jacobians
+    (4, N_THICKNESS, 3, 3), volume weights (4, N_THICKNESS) and tying-point shear strains
+    (4,), :func:`material_axes`' axes (4, N_THICKNESS, 2), the thickness ``h0`` and the
+    material row ``mat``."""
+    Jinv: np.ndarray
+    dV: np.ndarray
+    shear_ref: np.ndarray
+    axes: np.ndarray
+    h0: float
+    mat: np.ndarray
+
+
+class Perturbed(NamedTuple):
+    """Scratch of the central differences (:func:`element_tangent`, :func:`drilling`): the
+    element's forces at +h and -h (4, 6), its perturbed nodes, directors and drilling
+    vectors (4, 3), the rotation axis (3,) and a trial history (4 N_THICKNESS, STATE_SIZE)."""
+    f_plus: np.ndarray
+    f_minus: np.ndarray
+    x: np.ndarray
+    d: np.ndarray
+    r: np.ndarray
+    axis: np.ndarray
+    state: np.ndarray
+
+
+class DrillWork(NamedTuple):
+    """Scratch of :func:`drilling`: d omega/dq (4, 24), omega and its two perturbed
+    values (4,), three 3-vectors and a (4, 3) block of :func:`_drill_strains`."""
+    grad: np.ndarray
+    omega: np.ndarray
+    om_p: np.ndarray
+    om_m: np.ndarray
+    w3a: np.ndarray
+    w3b: np.ndarray
+    w3c: np.ndarray
+    w43: np.ndarray
 
 
 @njit(cache=True)
@@ -276,17 +317,31 @@ def work_arrays():
 
 
 @njit(cache=True)
-def element_force(x, d, Jinv, dV, shear_ref, h0, h, mat, axes, state_old, state_new, fe, work):
+def perturbed_arrays():
+    """A :class:`Perturbed`, allocated once per assembly."""
+    return Perturbed(np.empty((4, 6)), np.empty((4, 6)), np.empty((4, 3)), np.empty((4, 3)),
+                     np.empty((4, 3)), np.empty(3), np.empty((4 * N_THICKNESS, STATE_SIZE)))
+
+
+@njit(cache=True)
+def drill_arrays():
+    """A :class:`DrillWork`, allocated once per assembly."""
+    return DrillWork(np.empty((4, 24)), np.empty(4), np.empty(4), np.empty(4), np.empty(3),
+                     np.empty(3), np.empty(3), np.empty((4, 3)))
+
+
+@njit(cache=True)
+def element_force(x, d, ref, h, state_old, state_new, fe, work):
     """Internal force ``fe`` (4, 6) (forces, moments) of one element.
 
-    ``x`` (4, 3) current nodes, ``d`` (4, 3) current directors, reference data from
-    :func:`reference_element`,
-    ``mat`` = (E, nu, sigma_y, K, n[, MAT_J2]) or (E1, E2, nu12, G12, 0, MAT_ORTHOTROPIC),
-    ``axes`` (4, 5, 2) material axes from :func:`material_axes` (read by the
-    orthotropic law only), history (4 * 5, STATE_SIZE), ``work`` from
-    :func:`work_arrays`.
+    ``x`` (4, 3) current nodes, ``d`` (4, 3) current directors, ``ref`` its
+    :class:`ElementRef` (``mat`` = (E, nu, sigma_y, K, n[, MAT_J2]) or
+    (E1, E2, nu12, G12, 0, MAT_ORTHOTROPIC); the material axes are read by the
+    orthotropic law only), ``h`` its current thickness, history (4 * 5, STATE_SIZE),
+    ``work`` from :func:`work_arrays`.
     """
-    E, nu, sigma_y, K, n = mat[0], mat[1], mat[2], mat[3], mat[4]
+    Jinv, dV, shear_ref, axes, h0, mat = ref
+    j2 = J2Material(mat[0], mat[1], mat[2], mat[3], mat[4])
     G = shear_modulus(mat)
     ortho = material_kind(mat) == MAT_ORTHOTROPIC
     N, dN, g, f, P, eps, sig, Dm, w4, w44, tmp, mom, gam, gi_t, gz_t, Do = work
@@ -329,8 +384,7 @@ def element_force(x, d, Jinv, dV, shear_ref, h0, h, mat, axes, state_old, state_
                 for i in range(STATE_SIZE):
                     state_new[k, i] = state_old[k, i]
             else:
-                j2_plane_stress(eps, state_old[k], E, nu, sigma_y, K, n, sig, Dm, state_new[k],
-                                w4, w44)
+                j2_plane_stress(eps, state_old[k], j2, sig, Dm, state_new[k], w4, w44)
             S11, S22, S12 = _second_piola(sig, c1, c2, co, si)
             for i in range(3):
                 P[0, i] = S11 * f[0, i] + S12 * f[1, i]
@@ -411,11 +465,14 @@ def _drill_strains(x, d, r, Jc, omega, f0, f1, t, w43):
 
 
 @njit(cache=True)
-def drilling(x, d, r, Jc, k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, rp, axis, w3a, w3b, w3c,
-             w43):
+def drilling(x, d, r, Jc, k_d, fe, ke, pert, dw):
     """Drilling penalty 1/2 k_d sum omega_a^2: adds its force to ``fe`` (4, 6) and its
     Gauss-Newton tangent k_d grad^T grad to ``ke`` (24, 24); grad = d omega/dq by
-    central differences (the neglected omega d2(omega) term vanishes with omega)."""
+    central differences (the neglected omega d2(omega) term vanishes with omega).
+    ``r`` (4, 3) the nodal drilling vectors, ``Jc`` the centre's reference Jacobian,
+    scratch ``pert`` (:class:`Perturbed`) and ``dw`` (:class:`DrillWork`)."""
+    xp, dp, rp, axis = pert.x, pert.d, pert.r, pert.axis
+    grad, omega, om_p, om_m, w3a, w3b, w3c, w43 = dw
     scale = 0.0
     for a in range(4):
         for i in range(3):
@@ -448,12 +505,13 @@ def drilling(x, d, r, Jc, k_d, fe, ke, grad, omega, om_p, om_m, xp, dp, rp, axis
 
 
 @njit(cache=True)
-def element_tangent(x, d, Jinv, dV, shear_ref, h0, h, mat, axes, state_old, scratch, active, ke, fp,
-                    fm, xp, dp, axis, work):
+def element_tangent(x, d, ref, h, state_old, active, ke, pert, work):
     """Central-difference tangent ``ke`` (24, 24) of :func:`element_force`; columns of
     inactive DOFs (``active[j] == False``, held fixed) are left zero.  Central, not
     forward, differences: the O(h) error of the latter spoils Newton on thin shells,
-    whose bending stiffness is orders of magnitude below the membrane one."""
+    whose bending stiffness is orders of magnitude below the membrane one.  Scratch
+    ``pert`` (:class:`Perturbed`), ``work`` from :func:`work_arrays`."""
+    fp, fm, xp, dp, axis, scratch = pert.f_plus, pert.f_minus, pert.x, pert.d, pert.axis, pert.state
     scale = 0.0
     for a in range(4):
         for i in range(3):
@@ -473,8 +531,7 @@ def element_tangent(x, d, Jinv, dV, shear_ref, h0, h, mat, axes, state_old, scra
                 axis[:] = 0.0
                 axis[c - 3] = 1.0
                 rotate(d[a], axis, sign * FD_STEP, dp[a])
-            element_force(xp, dp, Jinv, dV, shear_ref, h0, h, mat, axes, state_old, scratch,
-                          fp if sign > 0 else fm, work)
+            element_force(xp, dp, ref, h, state_old, scratch, fp if sign > 0 else fm, work)
         step = 2.0 * (hu if c < 3 else FD_STEP)
         for b in range(4):
             for i in range(6):

@@ -16,10 +16,36 @@ elastic without evaluating eq. 2 (most of the section at any time).
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
 from harnesspipe.fe.materials.hardening import return_map
+
+
+class FibreSection(NamedTuple):
+    """Fibre section of an element (:func:`disc_fibres`)."""
+    y: np.ndarray           # (nf,) fibre coordinates in the section
+    z: np.ndarray           # (nf,)
+    area: np.ndarray        # (nf,) fibre areas
+    GJ: float               # torsional stiffness (elastic torsion)
+
+
+class FibreMaterial(NamedTuple):
+    """Eq. 2 J2 material of the fibres."""
+    E: float
+    sigma_y: float
+    K: float
+    n: float
+
+
+class FibreHistory(NamedTuple):
+    """Fibre history of one element: committed arrays read, trial arrays written."""
+    eps_p_old: np.ndarray   # (ng, nf) signed plastic strain
+    alpha_old: np.ndarray   # (ng, nf) accumulated plastic strain
+    eps_p_new: np.ndarray   # (ng, nf)
+    alpha_new: np.ndarray   # (ng, nf)
 
 
 def disc_fibres(radius: float, n_rings: int = 4, n_sectors: int = 16):
@@ -61,14 +87,19 @@ def fibre_update(eps, eps_p_old, alpha_old, E, sigma_y, K, n, elastic):
 
 
 @njit(cache=True)
-def section_response(e0, kappa_y, kappa_z, y, z, area, eps_p_old, alpha_old,
-                     eps_p_new, alpha_new, E, sigma_y, K, n, elastic, s, D):
+def section_response(e0, kappa_y, kappa_z, sec, mat, elastic, hist, g, s, D):
     """Resultants of the fibre section for the generalised strains (e0, kappa_y, kappa_z).
 
     Fibre strain ``eps = e0 + z kappa_y - y kappa_z``.  Writes the stress resultants
     ``s = (N, M_y, M_z)`` with ``M_y = int sigma z dA``, ``M_z = -int sigma y dA``
-    and the section tangent ``D = ds/de`` (3x3); trial history into ``*_new``.
+    and the section tangent ``D = ds/de`` (3x3); trial history of Gauss point ``g`` into
+    ``hist.*_new[g]``.  ``sec`` a :class:`FibreSection`, ``mat`` a :class:`FibreMaterial`,
+    ``hist`` a :class:`FibreHistory`; ``elastic`` skips the return map.
     """
+    y, z, area = sec.y, sec.z, sec.area
+    E, sigma_y, K, n = mat
+    eps_p_old, alpha_old = hist.eps_p_old[g], hist.alpha_old[g]
+    eps_p_new, alpha_new = hist.eps_p_new[g], hist.alpha_new[g]
     s0 = s1 = s2 = 0.0
     d00 = d01 = d02 = d11 = d12 = d22 = 0.0
     for f in range(y.shape[0]):

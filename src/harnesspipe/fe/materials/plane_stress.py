@@ -21,6 +21,8 @@ strain eps_bar_p of eq. 2 and the total through-thickness strain eps_33.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -32,6 +34,16 @@ SIGMA33_TOL = 1.0e-11  # relative tolerance on sigma_33 = 0
 SIGMA33_MAXIT = 30
 
 
+class J2Material(NamedTuple):
+    """Eqs. 1-2: Young's modulus, Poisson's ratio and the hardening law
+    sigma_y + K eps_bar_p^n."""
+    E: float
+    nu: float
+    sigma_y: float
+    K: float
+    n: float
+
+
 @njit(cache=True, inline="always")
 def _elastic_constants(E, nu):
     """Shear and bulk moduli."""
@@ -39,11 +51,11 @@ def _elastic_constants(E, nu):
 
 
 @njit(cache=True, inline="always")
-def _radial_return(a11, a22, a33, a12, eps_bar_p, sa, G, kappa, sigma_y, K, n, out4, D4,
-                   want_tangent):
+def _radial_return(a, eps_bar_p, sa, G, kappa, mat, out4, D4, want_tangent):
     """3D radial return for an elastic trial strain with eps_13 = eps_23 = 0.
 
-    ``a..`` are trial elastic strains (tensor components), ``sa = eps_bar_p**n`` (stored
+    ``a`` = (a11, a22, a33, a12) are trial elastic strains (tensor components), ``G`` and
+    ``kappa`` the shear and bulk moduli, ``mat`` the :class:`J2Material`, ``sa = eps_bar_p**n`` (stored
     history: the flow stress needs no power).  Writes the stress (11, 22, 33, 12) to
     ``out4`` and the consistent tangent in Voigt form (rows/cols 11, 22, 33, 12; the 12
     column acts on the engineering shear) to ``D4`` -- with ``want_tangent`` False only
@@ -51,6 +63,7 @@ def _radial_return(a11, a22, a33, a12, eps_bar_p, sa, G, kappa, sigma_y, K, n, o
     n11, n22, n33, n12, sa_new) with n the unit normal s_trial/|s_trial| (zero when
     elastic) and ``sa_new = (eps_bar_p + d eps_bar_p)**n``.
     """
+    a11, a22, a33, a12 = a
     tr = a11 + a22 + a33
     m = tr / 3.0
     s11 = 2.0 * G * (a11 - m)
@@ -59,7 +72,7 @@ def _radial_return(a11, a22, a33, a12, eps_bar_p, sa, G, kappa, sigma_y, K, n, o
     s12 = 2.0 * G * a12
     norm_s = np.sqrt(s11 * s11 + s22 * s22 + s33 * s33 + 2.0 * s12 * s12)
     q_trial = np.sqrt(1.5) * norm_s
-    dg, H, sa_new = return_map_from(q_trial, 3.0 * G, eps_bar_p, sa, sigma_y, K, n)
+    dg, H, sa_new = return_map_from(q_trial, 3.0 * G, eps_bar_p, sa, mat.sigma_y, mat.K, mat.n)
     theta = 1.0
     theta_bar = 0.0
     n11 = n22 = n33 = n12 = 0.0
@@ -87,8 +100,8 @@ def _radial_return(a11, a22, a33, a12, eps_bar_p, sa, G, kappa, sigma_y, K, n, o
 
 
 @njit(cache=True)
-def j2_plane_stress(eps, state_old, E, nu, sigma_y, K, n, sig, D, state_new, work4, work44):
-    """J2 plane-stress update with eq. 2 hardening.
+def j2_plane_stress(eps, state_old, mat, sig, D, state_new, work4, work44):
+    """J2 plane-stress update with eq. 2 hardening (``mat`` a :class:`J2Material`).
 
     ``eps`` (3,) total in-plane strain, ``state_old``/``state_new`` (STATE_SIZE,)
     history before/after, ``sig`` (3,) and ``D`` (3, 3) outputs, ``work4`` (4,)
@@ -96,17 +109,18 @@ def j2_plane_stress(eps, state_old, E, nu, sigma_y, K, n, sig, D, state_new, wor
     Returns the effective plastic strain increment.
     """
     ep = state_old[EPS_BAR_P]
-    sa = positive_pow(ep, n) if (ep > 0.0 and K != 0.0) else 0.0
-    return j2_plane_stress_from(eps, state_old, sa, E, nu, sigma_y, K, n, sig, D, state_new,
-                                work4, work44, True)[0]
+    sa = positive_pow(ep, mat.n) if (ep > 0.0 and mat.K != 0.0) else 0.0
+    return j2_plane_stress_from(eps, state_old, sa, mat, sig, D, state_new, work4, work44,
+                                True)[0]
 
 
 @njit(cache=True, inline="always")
-def j2_plane_stress_from(eps, state_old, sa, E, nu, sigma_y, K, n, sig, D, state_new, work4,
-                         work44, want_tangent):
+def j2_plane_stress_from(eps, state_old, sa, mat, sig, D, state_new, work4, work44,
+                         want_tangent):
     """:func:`j2_plane_stress` from a stored ``sa = eps_bar_p**n`` (history of the caller:
     no power for the flow stress), the tangent ``D`` formed only if ``want_tangent``
     (an explicit update needs none).  Returns ``(d eps_bar_p, sa_new)``."""
+    E, nu, sigma_y, K = mat.E, mat.nu, mat.sigma_y, mat.K
     G, kappa = _elastic_constants(E, nu)
     a11 = eps[0] - state_old[P11]
     a22 = eps[1] - state_old[P22]
@@ -117,9 +131,9 @@ def j2_plane_stress_from(eps, state_old, sa, E, nu, sigma_y, K, n, sig, D, state
     dg = 0.0
     sa_new = sa
     for _ in range(SIGMA33_MAXIT):
-        dg, n11, n22, n33, n12, sa_new = _radial_return(a11, a22, a33, a12, state_old[EPS_BAR_P],
-                                                        sa, G, kappa, sigma_y, K, n, work4,
-                                                        work44, want_tangent)
+        dg, n11, n22, n33, n12, sa_new = _radial_return((a11, a22, a33, a12),
+                                                        state_old[EPS_BAR_P], sa, G, kappa, mat,
+                                                        work4, work44, want_tangent)
         if abs(work4[2]) <= SIGMA33_TOL * scale:
             break
         a33 -= work4[2] / work44[2, 2]
