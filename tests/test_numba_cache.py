@@ -73,3 +73,63 @@ def test_openmp_threads_sleep_when_idle_unless_the_user_says_otherwise():
         out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                              check=True, env={**base, **extra})
         assert out.stdout.strip() == expected, extra
+
+
+SHELLS = textwrap.dedent("""
+    import sys
+    import numpy as np
+    from harnesspipe.fe.elements import shell_bt as bt
+    n = 16                                    # 256 shells: the parallel kernel (PARALLEL_MIN)
+    xs = np.linspace(0.0, 10.0, n + 1)
+    X = np.array([[x, y, 0.0] for y in xs for x in xs])
+    conn = np.array([[j * (n + 1) + i, j * (n + 1) + i + 1, (j + 1) * (n + 1) + i + 1,
+                      (j + 1) * (n + 1) + i] for j in range(n) for i in range(n)], dtype=np.int64)
+    h = np.full(n * n, 0.2)
+    mat = np.tile([2000.0, 0.3, 20.0, 100.0, 0.5, 0.0], (n * n, 1))
+    state = bt.init_shell_state(X, conn, h)
+    v = np.zeros((X.shape[0], 6))
+    v[:, 0] = 0.01 * X[:, 0]                  # a uniform stretch rate along x
+    f_el, f = np.zeros((n * n, 4, 6)), np.zeros((X.shape[0], 6))
+    if sys.argv[1] == "hg":
+        bt.shell_forces(X, v, conn, h, mat, state, 1e-3, f_el, f, 0.1)
+    else:
+        bt.shell_forces(X, v, conn, h, mat, state, 1e-3, f_el, f, sign=-1.0)
+    print(repr(float(np.abs(f).sum())))
+""")
+
+
+def test_parallel_shell_kernel_survives_a_cache_built_in_steps(tmp_path):
+    """One process caches the parallel shell kernel through one call signature, the next
+    adds another, the third loads that one: a cached njit caller compiled against the
+    parallel kernel loaded from the cache was cached broken and crashed the third process
+    (Numba 0.68); shell_bt.shell_forces is therefore a Python function."""
+    script = tmp_path / "shells.py"
+    script.write_text(SHELLS)
+    env = {"PYTHONPATH": str(REPO / "src"), "HARNESSPIPE_NUMBA_CACHE": str(tmp_path / "cache"),
+           "PATH": "/usr/bin:/bin", "NUMBA_NUM_THREADS": "1"}
+    runs = [subprocess.run([sys.executable, str(script), how], capture_output=True, text=True,
+                           env=env) for how in ("hg", "sign", "sign")]
+    assert [r.returncode for r in runs] == [0, 0, 0], runs[-1].stderr[-2000:]
+    totals = [float(r.stdout) for r in runs]
+    assert totals[0] > 0.0 and totals[1] == totals[2]
+
+
+def test_no_cached_kernel_calls_a_parallel_one():
+    """The rule behind the test above, for every kernel: a parallel=True kernel is called from
+    Python only, never from another njit function."""
+    import ast
+    pkg = REPO / "src" / "harnesspipe"
+    trees = {p: ast.parse(p.read_text()) for p in (pkg / "fe").rglob("*.py")}
+
+    def decorators(fn):
+        return [ast.unparse(d) for d in fn.decorator_list]
+
+    functions = [fn for tree in trees.values() for fn in ast.walk(tree)
+                 if isinstance(fn, ast.FunctionDef)]
+    parallel = {fn.name for fn in functions if any("parallel=True" in d for d in decorators(fn))}
+    callers = [(fn.name, call.func.id) for fn in functions
+               if any("njit" in d or "loop_kernel" in d for d in decorators(fn))
+               for call in ast.walk(fn)
+               if isinstance(call, ast.Call) and isinstance(call.func, ast.Name)
+               and call.func.id in parallel]
+    assert parallel and callers == []

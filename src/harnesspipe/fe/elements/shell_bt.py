@@ -72,14 +72,18 @@ def scatter_add(conn, f_el, f_int, sign=1.0):
                 f_int[nd, i] += sign * f_el[e, a, i]
 
 
-@njit(cache=True)
 def shell_forces(x, v, conn, thick, mat, state, dt, f_el, f_int, hg=HOURGLASS_COEF, sign=1.0):
     """One BLT internal-force evaluation: stress update over ``dt`` with the half-step
     velocities ``v`` (n_nodes, 6) at positions ``x`` (n_nodes, 3), element forces into
     ``f_el`` (n_el, 4, 6) and ``sign`` x them ADDED to ``f_int`` (n_nodes, 6) (1: the
     resisting force, -1: the force ON the nodes).  Nodes not in ``conn`` are not touched.
     Meshes with fewer than ``PARALLEL_MIN`` elements run serially (a thread launch costs
-    more than they do)."""
+    more than they do).
+
+    A Python function on purpose: a cached ``njit`` function that calls a ``parallel=True``
+    kernel which was itself loaded from Numba's cache when the caller compiled is cached
+    broken, and the next process that loads it crashes (Numba 0.68; tests/test_numba_cache.py
+    replays the sequence).  The dispatch costs a few microseconds a step."""
     if conn.shape[0] < PARALLEL_MIN:
         shell_element_forces_serial(x, v, conn, thick, mat, state, dt, f_el, hg)
     else:
