@@ -181,6 +181,11 @@ class TubeBendingSystem:
         n_pins = self.pins.c0.shape[0]
         self.hist_q = np.full((n_pins, PIN_PATCHES), -1, dtype=np.int64)
         self.hist_ft = np.zeros((n_pins, PIN_PATCHES, 3))
+        # the contact's groups, once: the pins move and the patches' history changes in place
+        self.facets = PinFacetSet(tube.conn, tube.contact_t, self.mu, np.zeros(n_pins), self.k_n,
+                                  self.k_n, self.hist_q, self.hist_ft)
+        p = self.pins
+        self.cylinders = Cylinders(p.centres, p.axes, p.radii, p.velocity)
 
     def _pins(self, tp: dict, ramp: float) -> Pins:
         """The roller at x = span/2 below, the feeder at 0 above, each moved onto the tube's
@@ -215,12 +220,9 @@ class TubeBendingSystem:
         F[...] = 0.0
         shell_forces(self.x, v, self.tube.conn, self.tube.thick, self.tube.mat, self.state, dt,
                      self.f_el, F[0], sign=-1.0)
-        p = self.pins
-        p.force[...] = 0.0
-        fset = PinFacetSet(self.tube.conn, self.tube.contact_t, self.mu, np.zeros(3), self.k_n,
-                           self.k_n, self.hist_q, self.hist_ft)
-        pins = Cylinders(p.centres, p.axes, p.radii, p.velocity)
-        facets_cylinder_contact(self.x, v, fset, pins, dt, F[1], F[2], p.force)
+        self.pins.force[...] = 0.0
+        facets_cylinder_contact(self.x, v, self.facets, self.cylinders, dt, F[1], F[2],
+                                self.pins.force)
         return F
 
     def advance(self, du, t):
