@@ -184,7 +184,6 @@ class YHarness:
         self.X = layout.X
         nn = self.X.shape[0]
         self.ndof = NDOF_NODE * nn
-        self.alpha = alpha
         self.pull = pull                      # t -> crosshead displacement vector
         self.xi_g, self.w_g = lobatto_points(mesh.n_gauss)
         self.beams = [_Beams(self.X, conn, properties[case], mesh) for case, conn in layout.beams]
